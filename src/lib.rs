@@ -1,0 +1,31 @@
+//! # cstep — continuous space-time empowerment (C-STEP) for mobile robots
+//!
+//! C-STEP scores how safe a robot's state is as the log-volume of the set of positions it can
+//! still reach within a horizon `T` without colliding (Daubt & Redder, "C-STEP: Continuous
+//! Space-Time Empowerment for Physics-informed Safe Reinforcement Learning of Mobile Agents").
+//!
+//! The crate's core knows nothing of ROS: a [`state::RobotState`] and a [`occupancy::Scan`] go in,
+//! an [`estimator::Estimate`] and a [`reward::Reward`] come out. The pipeline, one module a step:
+//!
+//! 1. [`model`] — robot dynamics behind the [`model::Dynamics`] trait (a URDF-derived quadrotor,
+//!    the paper prototype's point mass);
+//! 2. [`sampling`] — admissible control trajectories (Fourier, Chebyshev, bang-bang);
+//! 3. [`rollout`] — batched RK4 integration with path-wise collision checks;
+//! 4. [`occupancy`] — the free space seen by a 2D LiDAR scan, inflated by the robot's radius;
+//! 5. [`volume`] — reachable and terminal volumes from the rollout endpoints;
+//! 6. [`estimator`] — Algorithm 1 end to end;
+//! 7. [`reward`] — the empowered reward `r_d · log(c · λ)`.
+//!
+//! [`config`] reads the node's `ros__parameters` YAML; [`ros`] holds the ROS message mirrors.
+
+pub mod config;
+pub mod error;
+pub mod estimator;
+pub mod model;
+pub mod occupancy;
+pub mod reward;
+pub mod ros;
+pub mod rollout;
+pub mod sampling;
+pub mod state;
+pub mod volume;

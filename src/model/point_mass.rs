@@ -1,1 +1,89 @@
-//! (in progress)
+//! The paper prototype's robot: a point mass under bounded acceleration (a double integrator).
+//!
+//! Kept for comparison with the authors' prototype and because its reachable set is known
+//! exactly: from velocity `v` with `|a_i| ≤ A` per axis, the positions reachable at `T` form the
+//! box `v·T ± A·T²/2` — the reference the estimator tests are checked against.
+
+use super::{Batch, CommandAxes, Dynamics};
+use crate::state::RobotState;
+
+/// A double integrator with a per-axis acceleration bound.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PointMass {
+    max_acceleration: f64,
+    radius: f64,
+    height: f64,
+}
+
+impl PointMass {
+    /// A point mass whose acceleration is bounded by `max_acceleration` (m/s²) per axis, with a
+    /// collision disk of `radius` and a collision height of `height` (metres).
+    pub fn new(max_acceleration: f64, radius: f64, height: f64) -> Self {
+        Self {
+            max_acceleration,
+            radius,
+            height,
+        }
+    }
+
+    /// The per-axis acceleration bound, m/s².
+    pub fn max_acceleration(&self) -> f64 {
+        self.max_acceleration
+    }
+}
+
+const VX: usize = 3;
+
+impl Dynamics for PointMass {
+    fn name(&self) -> &'static str {
+        "point_mass"
+    }
+
+    fn state_components(&self) -> usize {
+        6
+    }
+
+    fn actuation_components(&self) -> usize {
+        3
+    }
+
+    fn initial_state(&self, state: &RobotState, batch: &mut Batch) {
+        for axis in 0..3 {
+            batch.fill_component(axis, 0.0);
+            batch.fill_component(VX + axis, state.velocity[axis] as f32);
+        }
+    }
+
+    fn actuate(&self, state: &Batch, commands: &[f32], axes: CommandAxes, actuation: &mut Batch) {
+        let lanes = state.lanes();
+        let bound = self.max_acceleration as f32;
+        for axis in 0..3 {
+            let out = actuation.component_mut(axis);
+            if axis < axes.count() {
+                let command = &commands[axis * lanes..(axis + 1) * lanes];
+                for (a, &c) in out.iter_mut().zip(command) {
+                    *a = bound * c.clamp(-1.0, 1.0);
+                }
+            } else {
+                out.fill(0.0);
+            }
+        }
+    }
+
+    fn derivative(&self, state: &Batch, actuation: &Batch, out: &mut Batch) {
+        for axis in 0..3 {
+            out.component_mut(axis)
+                .copy_from_slice(state.component(VX + axis));
+            out.component_mut(VX + axis)
+                .copy_from_slice(actuation.component(axis));
+        }
+    }
+
+    fn collision_radius(&self) -> f64 {
+        self.radius
+    }
+
+    fn collision_height(&self) -> f64 {
+        self.height
+    }
+}

@@ -248,7 +248,10 @@ mod tests {
                 let peak = (0..100)
                     .map(|k| controls.get(k, 0, lane).abs())
                     .fold(0.0f32, f32::max);
-                assert!((peak - 1.0).abs() < 1e-6, "{kind:?} lane {lane} peaks at {peak}");
+                assert!(
+                    (peak - 1.0).abs() < 1e-6,
+                    "{kind:?} lane {lane} peaks at {peak}"
+                );
             }
         }
     }

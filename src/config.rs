@@ -1,1 +1,618 @@
-//! (in progress)
+//! The node's parameters: ROS 2 `ros__parameters` YAML, validated on load with clear errors.
+//!
+//! Parameters are read into a [`ParameterSet`] (from a file, the built-in defaults, and
+//! `-p name:=value` overrides), then each consumer takes the names it owns and checks them; any
+//! name nobody took is reported as unknown, so a typo never silently falls back to a default.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use serde_norway::Value;
+
+use crate::occupancy::UnknownSpace;
+use crate::sampling::SamplerKind;
+use crate::volume::{EstimatorKind, VolumeDims};
+
+/// The node name whose parameters are read when none is given.
+pub const DEFAULT_NODE_NAME: &str = "cstep_node";
+
+/// The default parameter file, compiled in so the binary runs anywhere.
+pub const BUILTIN_CONFIG: &str = include_str!("../config/cstep.yaml");
+
+/// The Crazyflie 2.x URDF, compiled in for the built-in defaults.
+pub const BUILTIN_URDF: &str = include_str!("../urdf/cf2x.urdf");
+
+/// A parameter file or value that cannot be used, with where it came from.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{source_name}: {message}")]
+pub struct ConfigError {
+    /// The file (or "command line") the bad value came from.
+    pub source_name: String,
+    /// What is wrong, naming the parameter and the value.
+    pub message: String,
+}
+
+impl ConfigError {
+    fn new(source_name: &str, message: impl Into<String>) -> Self {
+        Self {
+            source_name: source_name.to_owned(),
+            message: message.into(),
+        }
+    }
+}
+
+/// Parameter values by name, each remembering where it was set.
+#[derive(Debug, Clone, Default)]
+pub struct ParameterSet {
+    values: BTreeMap<String, (Value, String)>,
+}
+
+impl ParameterSet {
+    /// The built-in defaults (`config/cstep.yaml` as compiled in).
+    pub fn builtin() -> Self {
+        let mut set = Self::default();
+        set.merge_yaml(BUILTIN_CONFIG, "built-in config", None, DEFAULT_NODE_NAME)
+            .expect("the built-in config is valid");
+        set.values.insert(
+            "robot_description".into(),
+            (
+                Value::String(BUILTIN_URDF_PATH.into()),
+                "built-in config".into(),
+            ),
+        );
+        set
+    }
+
+    /// The built-in defaults overlaid with the parameters file `path` for node `node_name`.
+    pub fn from_file(path: &Path, node_name: &str) -> Result<Self, ConfigError> {
+        let source = path.display().to_string();
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| ConfigError::new(&source, format!("cannot read the file: {e}")))?;
+        let mut set = Self::builtin();
+        set.merge_yaml(&text, &source, path.parent(), node_name)?;
+        Ok(set)
+    }
+
+    /// Overlays one `name:=value` assignment from the command line (the value is read as YAML).
+    pub fn assign(&mut self, assignment: &str) -> Result<(), ConfigError> {
+        let source = "command line";
+        let (name, value) = assignment.split_once(":=").ok_or_else(|| {
+            ConfigError::new(
+                source,
+                format!("'{assignment}' is not a parameter assignment of the form name:=value"),
+            )
+        })?;
+        let value: Value = serde_norway::from_str(value).map_err(|e| {
+            ConfigError::new(source, format!("cannot read the value of '{name}': {e}"))
+        })?;
+        self.values
+            .insert(name.trim().to_owned(), (value, source.to_owned()));
+        Ok(())
+    }
+
+    /// Reads a `ros__parameters` file's section for `node_name` (or the `/**` wildcard) into the
+    /// set; nested maps become dotted names as in ROS 2.
+    fn merge_yaml(
+        &mut self,
+        text: &str,
+        source: &str,
+        base_dir: Option<&Path>,
+        node_name: &str,
+    ) -> Result<(), ConfigError> {
+        let document: Value = serde_norway::from_str(text)
+            .map_err(|e| ConfigError::new(source, format!("not valid YAML: {e}")))?;
+        let Value::Mapping(nodes) = document else {
+            return Err(ConfigError::new(
+                source,
+                "expected a mapping of node names to `ros__parameters`",
+            ));
+        };
+        let bare = node_name.trim_start_matches('/');
+        let mut found = false;
+        for (key, section) in &nodes {
+            let key = key.as_str().unwrap_or_default();
+            let matches = key == "/**" || key.trim_start_matches('/') == bare;
+            if !matches {
+                continue;
+            }
+            let parameters = section.get("ros__parameters").ok_or_else(|| {
+                ConfigError::new(
+                    source,
+                    format!("node '{key}' has no `ros__parameters` section"),
+                )
+            })?;
+            let Value::Mapping(parameters) = parameters else {
+                return Err(ConfigError::new(
+                    source,
+                    format!("`{key}.ros__parameters` must be a mapping"),
+                ));
+            };
+            found = true;
+            let mut flat = Vec::new();
+            flatten("", parameters, &mut flat);
+            for (name, mut value) in flat {
+                if name == "robot_description" {
+                    value = resolve_path(value, base_dir);
+                }
+                self.values.insert(name, (value, source.to_owned()));
+            }
+        }
+        if found {
+            Ok(())
+        } else {
+            Err(ConfigError::new(
+                source,
+                format!("no parameters for node '{bare}' (expected a '{bare}:' or '/**:' section)"),
+            ))
+        }
+    }
+
+    fn take(&mut self, name: &str) -> Option<(Value, String)> {
+        self.values.remove(name)
+    }
+
+    /// Takes a number; `None` when unset, null or NaN (the ROS idiom for "not set").
+    pub fn take_f64(&mut self, name: &str) -> Result<Option<f64>, ConfigError> {
+        let Some((value, source)) = self.take(name) else {
+            return Ok(None);
+        };
+        match value {
+            Value::Null => Ok(None),
+            Value::Number(n) => Ok(n.as_f64().filter(|v| !v.is_nan())),
+            other => Err(ConfigError::new(
+                &source,
+                format!("'{name}' must be a number, got {}", show(&other)),
+            )),
+        }
+    }
+
+    /// Takes a non-negative integer.
+    pub fn take_u64(&mut self, name: &str) -> Result<Option<u64>, ConfigError> {
+        let Some((value, source)) = self.take(name) else {
+            return Ok(None);
+        };
+        match &value {
+            Value::Null => Ok(None),
+            Value::Number(n) if n.as_u64().is_some() => Ok(n.as_u64()),
+            other => Err(ConfigError::new(
+                &source,
+                format!("'{name}' must be a whole number ≥ 0, got {}", show(other)),
+            )),
+        }
+    }
+
+    /// Takes a string (numbers are accepted and read as text, as `volume_dims: 2` is).
+    pub fn take_string(&mut self, name: &str) -> Result<Option<(String, String)>, ConfigError> {
+        let Some((value, source)) = self.take(name) else {
+            return Ok(None);
+        };
+        match value {
+            Value::Null => Ok(None),
+            Value::String(s) => Ok(Some((s, source))),
+            Value::Number(n) => Ok(Some((n.to_string(), source))),
+            other => Err(ConfigError::new(
+                &source,
+                format!("'{name}' must be a string, got {}", show(&other)),
+            )),
+        }
+    }
+
+    /// Fails on the first parameter no consumer took.
+    pub fn finish(self, known: &[&str]) -> Result<(), ConfigError> {
+        match self.values.into_iter().next() {
+            None => Ok(()),
+            Some((name, (_, source))) => Err(ConfigError::new(
+                &source,
+                format!("unknown parameter '{name}' (known: {})", known.join(", ")),
+            )),
+        }
+    }
+}
+
+/// The marker path the built-in config uses for the compiled-in URDF.
+pub const BUILTIN_URDF_PATH: &str = "builtin:cf2x.urdf";
+
+fn flatten(prefix: &str, mapping: &serde_norway::Mapping, out: &mut Vec<(String, Value)>) {
+    for (key, value) in mapping {
+        let key = match key {
+            Value::String(s) => s.clone(),
+            other => show(other),
+        };
+        let name = if prefix.is_empty() {
+            key
+        } else {
+            format!("{prefix}.{key}")
+        };
+        match value {
+            Value::Mapping(inner) => flatten(&name, inner, out),
+            other => out.push((name, other.clone())),
+        }
+    }
+}
+
+fn resolve_path(value: Value, base_dir: Option<&Path>) -> Value {
+    match (&value, base_dir) {
+        (Value::String(s), Some(dir))
+            if Path::new(s).is_relative() && !s.starts_with("builtin:") =>
+        {
+            Value::String(dir.join(s).display().to_string())
+        }
+        _ => value,
+    }
+}
+
+fn show(value: &Value) -> String {
+    serde_norway::to_string(value)
+        .map(|s| s.trim().to_owned())
+        .unwrap_or_else(|_| format!("{value:?}"))
+}
+
+/// Which dynamics model rolls out the trajectories.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ModelKind {
+    /// The URDF-derived 6-DoF quadrotor with motors and an attitude controller.
+    Quadrotor,
+    /// The paper prototype's double integrator.
+    PointMass,
+}
+
+impl ModelKind {
+    /// The name used in configuration files.
+    pub fn name(self) -> &'static str {
+        match self {
+            ModelKind::Quadrotor => "quadrotor",
+            ModelKind::PointMass => "point_mass",
+        }
+    }
+
+    /// Parses a configuration name.
+    pub fn from_name(name: &str) -> Option<Self> {
+        [ModelKind::Quadrotor, ModelKind::PointMass]
+            .into_iter()
+            .find(|m| m.name() == name)
+    }
+}
+
+/// Where the robot's URDF comes from.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum RobotSource {
+    /// The compiled-in Crazyflie 2.x.
+    Builtin,
+    /// A URDF file.
+    File(PathBuf),
+}
+
+/// Everything an evaluation needs, validated.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Settings {
+    /// The robot's URDF.
+    pub robot_description: RobotSource,
+    /// The dynamics model.
+    pub model: ModelKind,
+    /// Horizon `T`, seconds.
+    pub horizon: f64,
+    /// Number of sampled control trajectories `N`.
+    pub trajectories: usize,
+    /// RK4 steps per trajectory (points per trajectory).
+    pub steps: usize,
+    /// The control sampler.
+    pub sampler: SamplerKind,
+    /// Seed of the control sample.
+    pub seed: u64,
+    /// Safety coefficient `c > 0`.
+    pub safety_coefficient: f64,
+    /// Dimension of the volumes (and of the commands: 2 = at held altitude).
+    pub volume_dims: VolumeDims,
+    /// The free-volume estimator.
+    pub estimator: EstimatorKind,
+    /// Robot disk radius override, metres.
+    pub robot_radius: Option<f64>,
+    /// Commanded acceleration bound override, m/s².
+    pub max_acceleration: Option<f64>,
+    /// Treatment of space the scan does not describe.
+    pub unknown_space: UnknownSpace,
+    /// Floor height (odometry frame), metres.
+    pub floor_height: Option<f64>,
+    /// Ceiling height (odometry frame), metres.
+    pub ceiling_height: Option<f64>,
+}
+
+/// The parameter names [`Settings`] owns — a contract with users' parameter files.
+pub const SETTINGS_PARAMETERS: [&str; 16] = [
+    "robot_description",
+    "model",
+    "horizon",
+    "trajectories",
+    "steps",
+    "sampler",
+    "seed",
+    "safety_coefficient",
+    "volume_dims",
+    "estimator",
+    "robot_radius",
+    "max_acceleration",
+    "unknown_space",
+    "floor_height",
+    "ceiling_height",
+    "use_sim_time",
+];
+
+/// Largest accepted trajectory count and step count: beyond these an evaluation takes seconds.
+const MAX_TRAJECTORIES: u64 = 100_000;
+const MAX_STEPS: u64 = 10_000;
+
+impl Settings {
+    /// The built-in defaults: the paper's settings with the Crazyflie 2.x.
+    pub fn builtin() -> Self {
+        let mut set = ParameterSet::builtin();
+        let settings = Self::take_from(&mut set).expect("the built-in config is valid");
+        set.finish(&SETTINGS_PARAMETERS)
+            .expect("the built-in config has no unknown parameters");
+        settings
+    }
+
+    /// Loads a parameters file for node `node_name`, applies `-p` overrides, and validates.
+    pub fn load(
+        path: Option<&Path>,
+        node_name: &str,
+        overrides: &[String],
+    ) -> Result<Self, ConfigError> {
+        let mut set = match path {
+            Some(path) => ParameterSet::from_file(path, node_name)?,
+            None => ParameterSet::builtin(),
+        };
+        for assignment in overrides {
+            set.assign(assignment)?;
+        }
+        let settings = Self::take_from(&mut set)?;
+        set.finish(&SETTINGS_PARAMETERS)?;
+        Ok(settings)
+    }
+
+    /// Takes and validates this struct's parameters from `set`, leaving the others.
+    pub fn take_from(set: &mut ParameterSet) -> Result<Self, ConfigError> {
+        let robot_description = match set.take_string("robot_description")? {
+            None => RobotSource::Builtin,
+            Some((path, _)) if path == BUILTIN_URDF_PATH => RobotSource::Builtin,
+            Some((path, _)) => RobotSource::File(PathBuf::from(path)),
+        };
+        let model = named(
+            set,
+            "model",
+            ModelKind::from_name,
+            &["quadrotor", "point_mass"],
+        )?
+        .unwrap_or(ModelKind::Quadrotor);
+        let horizon = positive(set, "horizon")?.unwrap_or(1.0);
+        let trajectories = bounded_count(set, "trajectories", 1, MAX_TRAJECTORIES)?.unwrap_or(150);
+        let steps = bounded_count(set, "steps", 1, MAX_STEPS)?.unwrap_or(100);
+        let samplers: Vec<_> = SamplerKind::ALL.iter().map(|s| s.name()).collect();
+        let sampler = named(set, "sampler", SamplerKind::from_name, &samplers)?
+            .unwrap_or(SamplerKind::BangBang);
+        let seed = set.take_u64("seed")?.unwrap_or(0);
+        let safety_coefficient = positive(set, "safety_coefficient")?.unwrap_or(1.0);
+        let volume_dims = named(
+            set,
+            "volume_dims",
+            |s| match s {
+                "2" => Some(VolumeDims::Two),
+                "3" => Some(VolumeDims::Three),
+                _ => None,
+            },
+            &["2", "3"],
+        )?
+        .unwrap_or(VolumeDims::Two);
+        let estimators: Vec<_> = EstimatorKind::ALL.iter().map(|e| e.name()).collect();
+        let estimator = named(set, "estimator", EstimatorKind::from_name, &estimators)?
+            .unwrap_or(EstimatorKind::Hull);
+        let robot_radius = positive(set, "robot_radius")?;
+        let max_acceleration = positive(set, "max_acceleration")?;
+        let unknown_space = named(
+            set,
+            "unknown_space",
+            UnknownSpace::from_name,
+            &["occupied", "free"],
+        )?
+        .unwrap_or(UnknownSpace::Occupied);
+        let ceiling_source = set.values.get("ceiling_height").map(|(_, s)| s.clone());
+        let floor_height = finite(set, "floor_height")?;
+        let ceiling_height = finite(set, "ceiling_height")?;
+        if let (Some(floor), Some(ceiling)) = (floor_height, ceiling_height) {
+            if ceiling <= floor {
+                return Err(ConfigError::new(
+                    &ceiling_source.unwrap_or_default(),
+                    format!("'ceiling_height' ({ceiling}) must be above 'floor_height' ({floor})"),
+                ));
+            }
+        }
+        // Accepted for ROS compatibility; the node reads it (simulated time only changes stamps).
+        set.take("use_sim_time");
+        Ok(Self {
+            robot_description,
+            model,
+            horizon,
+            trajectories,
+            steps,
+            sampler,
+            seed,
+            safety_coefficient,
+            volume_dims,
+            estimator,
+            robot_radius,
+            max_acceleration,
+            unknown_space,
+            floor_height,
+            ceiling_height,
+        })
+    }
+}
+
+fn named<T>(
+    set: &mut ParameterSet,
+    name: &str,
+    parse: impl Fn(&str) -> Option<T>,
+    choices: &[&str],
+) -> Result<Option<T>, ConfigError> {
+    let Some((text, source)) = set.take_string(name)? else {
+        return Ok(None);
+    };
+    parse(&text).map(Some).ok_or_else(|| {
+        ConfigError::new(
+            &source,
+            format!(
+                "'{name}' must be one of {}, got \"{text}\"",
+                choices.join(" | ")
+            ),
+        )
+    })
+}
+
+fn positive(set: &mut ParameterSet, name: &str) -> Result<Option<f64>, ConfigError> {
+    let source = set.values.get(name).map(|(_, s)| s.clone());
+    match set.take_f64(name)? {
+        Some(v) if !(v.is_finite() && v > 0.0) => Err(ConfigError::new(
+            &source.unwrap_or_default(),
+            format!("'{name}' must be a positive number, got {v}"),
+        )),
+        other => Ok(other),
+    }
+}
+
+fn finite(set: &mut ParameterSet, name: &str) -> Result<Option<f64>, ConfigError> {
+    let source = set.values.get(name).map(|(_, s)| s.clone());
+    match set.take_f64(name)? {
+        Some(v) if !v.is_finite() => Err(ConfigError::new(
+            &source.unwrap_or_default(),
+            format!("'{name}' must be a finite number, got {v}"),
+        )),
+        other => Ok(other),
+    }
+}
+
+fn bounded_count(
+    set: &mut ParameterSet,
+    name: &str,
+    min: u64,
+    max: u64,
+) -> Result<Option<usize>, ConfigError> {
+    let source = set.values.get(name).map(|(_, s)| s.clone());
+    match set.take_u64(name)? {
+        Some(v) if v < min || v > max => Err(ConfigError::new(
+            &source.unwrap_or_default(),
+            format!("'{name}' must be between {min} and {max}, got {v}"),
+        )),
+        other => Ok(other.map(|v| v as usize)),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
+        let path = dir.join(name);
+        std::fs::write(&path, text).unwrap();
+        path
+    }
+
+    fn temp_dir(tag: &str) -> PathBuf {
+        let dir = std::env::temp_dir().join(format!("cstep-config-{tag}-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        dir
+    }
+
+    #[test]
+    fn builtin_defaults_are_the_papers_settings() {
+        let s = Settings::builtin();
+        assert_eq!(s.model, ModelKind::Quadrotor);
+        assert_eq!((s.horizon, s.trajectories, s.steps), (1.0, 150, 100));
+        assert_eq!(s.volume_dims, VolumeDims::Two);
+        assert_eq!(s.robot_description, RobotSource::Builtin);
+        assert_eq!(s.robot_radius, None);
+    }
+
+    #[test]
+    fn the_shipped_config_file_loads_and_resolves_the_urdf_next_to_it() {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("config/cstep.yaml");
+        let s = Settings::load(Some(&path), DEFAULT_NODE_NAME, &[]).unwrap();
+        let RobotSource::File(urdf) = &s.robot_description else {
+            panic!()
+        };
+        assert!(urdf.exists(), "{}", urdf.display());
+    }
+
+    #[test]
+    fn overrides_and_wildcard_sections_apply() {
+        let dir = temp_dir("wild");
+        let path = write(
+            &dir,
+            "p.yaml",
+            "/**:\n  ros__parameters:\n    horizon: 0.5\n",
+        );
+        let s = Settings::load(
+            Some(&path),
+            "anything",
+            &["trajectories:=2000".into(), "model:=point_mass".into()],
+        )
+        .unwrap();
+        assert_eq!(s.horizon, 0.5);
+        assert_eq!(s.trajectories, 2000);
+        assert_eq!(s.model, ModelKind::PointMass);
+    }
+
+    #[test]
+    fn bad_values_name_the_file_the_parameter_and_the_value() {
+        let dir = temp_dir("bad");
+        let cases = [
+            ("horizon: -1", "'horizon' must be a positive number, got -1"),
+            ("horizon: soon", "'horizon' must be a number, got soon"),
+            (
+                "trajectories: 0",
+                "'trajectories' must be between 1 and 100000, got 0",
+            ),
+            (
+                "sampler: uniform",
+                "'sampler' must be one of fourier | chebyshev | bang_bang, got \"uniform\"",
+            ),
+            (
+                "volume_dims: 4",
+                "'volume_dims' must be one of 2 | 3, got \"4\"",
+            ),
+            ("horizn: 1.0", "unknown parameter 'horizn'"),
+            (
+                "safety_coefficient: 0",
+                "'safety_coefficient' must be a positive number, got 0",
+            ),
+        ];
+        for (line, expected) in cases {
+            let path = write(
+                &dir,
+                "bad.yaml",
+                &format!("cstep_node:\n  ros__parameters:\n    {line}\n"),
+            );
+            let err = Settings::load(Some(&path), DEFAULT_NODE_NAME, &[]).unwrap_err();
+            let text = err.to_string();
+            assert!(text.starts_with(&path.display().to_string()), "{text}");
+            assert!(text.contains(expected), "{text} lacks {expected}");
+        }
+        let err = Settings::load(None, DEFAULT_NODE_NAME, &["seed=3".into()]).unwrap_err();
+        assert!(err.to_string().contains("name:=value"));
+        let path = write(
+            &dir,
+            "other.yaml",
+            "other_node:\n  ros__parameters:\n    seed: 1\n",
+        );
+        let err = Settings::load(Some(&path), DEFAULT_NODE_NAME, &[]).unwrap_err();
+        assert!(
+            err.to_string()
+                .contains("no parameters for node 'cstep_node'"),
+            "{err}"
+        );
+        let path = write(&dir, "broken.yaml", "cstep_node: [unclosed\n");
+        let err = Settings::load(Some(&path), DEFAULT_NODE_NAME, &[]).unwrap_err();
+        assert!(err.to_string().contains("not valid YAML"), "{err}");
+        let err =
+            Settings::load(Some(&dir.join("missing.yaml")), DEFAULT_NODE_NAME, &[]).unwrap_err();
+        assert!(err.to_string().contains("cannot read the file"), "{err}");
+    }
+}

@@ -19,7 +19,6 @@
 //! [`config`] reads the node's `ros__parameters` YAML; [`ros`] holds the ROS message mirrors.
 
 pub mod config;
-pub mod error;
 pub mod estimator;
 pub mod model;
 pub mod occupancy;

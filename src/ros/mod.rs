@@ -1,1 +1,9 @@
-//! (in progress)
+//! Everything that knows about ROS: message mirrors and their conversion to the core's types.
+//!
+//! The core ([`crate::estimator`] and below) sees only [`crate::state::RobotState`] and
+//! [`crate::occupancy::Scan`]; this module reads `nav_msgs/Odometry` and
+//! `sensor_msgs/LaserScan` (as JSON for `cstep eval`, as CDR on the wire for the node),
+//! validates them, and writes `cstep_msgs` results.
+
+pub mod convert;
+pub mod messages;

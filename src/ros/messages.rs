@@ -1,0 +1,334 @@
+//! Serde mirrors of the ROS 2 messages cstep reads and writes.
+//!
+//! Field names and order follow the `.msg` definitions exactly: the same structs serve JSON
+//! (`cstep eval`, rosbridge-style) and CDR (the DDS wire format). Every field has a default so
+//! hand-written JSON may leave out what it does not need.
+
+use serde::{Deserialize, Serialize};
+use serde_big_array::BigArray;
+
+/// `builtin_interfaces/Time`.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, PartialOrd, Ord, Serialize, Deserialize)]
+#[serde(default)]
+pub struct Time {
+    /// Seconds.
+    pub sec: i32,
+    /// Nanoseconds within the second.
+    pub nanosec: u32,
+}
+
+impl Time {
+    /// The time in seconds.
+    pub fn seconds(self) -> f64 {
+        self.sec as f64 + self.nanosec as f64 * 1e-9
+    }
+}
+
+/// `std_msgs/Header`.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct Header {
+    /// Acquisition time.
+    pub stamp: Time,
+    /// Coordinate frame of the data.
+    pub frame_id: String,
+}
+
+/// `geometry_msgs/Point`.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct Point {
+    /// x, metres.
+    pub x: f64,
+    /// y, metres.
+    pub y: f64,
+    /// z, metres.
+    pub z: f64,
+}
+
+/// `geometry_msgs/Vector3`.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct Vector3 {
+    /// x component.
+    pub x: f64,
+    /// y component.
+    pub y: f64,
+    /// z component.
+    pub z: f64,
+}
+
+/// `geometry_msgs/Quaternion`; defaults to the identity (w = 1) as in ROS 2.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct Quaternion {
+    /// x component.
+    pub x: f64,
+    /// y component.
+    pub y: f64,
+    /// z component.
+    pub z: f64,
+    /// w (scalar) component.
+    pub w: f64,
+}
+
+impl Default for Quaternion {
+    fn default() -> Self {
+        Self {
+            x: 0.0,
+            y: 0.0,
+            z: 0.0,
+            w: 1.0,
+        }
+    }
+}
+
+/// `geometry_msgs/Pose`.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct Pose {
+    /// Position.
+    pub position: Point,
+    /// Orientation (body → parent frame).
+    pub orientation: Quaternion,
+}
+
+/// `geometry_msgs/PoseWithCovariance`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct PoseWithCovariance {
+    /// The pose.
+    pub pose: Pose,
+    /// Row-major 6×6 covariance (x, y, z, rotation about x, y, z).
+    #[serde(with = "BigArray")]
+    pub covariance: [f64; 36],
+}
+
+/// `geometry_msgs/Twist`.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct Twist {
+    /// Linear velocity, m/s.
+    pub linear: Vector3,
+    /// Angular velocity, rad/s.
+    pub angular: Vector3,
+}
+
+/// `geometry_msgs/TwistWithCovariance`.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct TwistWithCovariance {
+    /// The twist.
+    pub twist: Twist,
+    /// Row-major 6×6 covariance.
+    #[serde(with = "BigArray")]
+    pub covariance: [f64; 36],
+}
+
+impl Default for PoseWithCovariance {
+    fn default() -> Self {
+        Self {
+            pose: Pose::default(),
+            covariance: [0.0; 36],
+        }
+    }
+}
+
+impl Default for TwistWithCovariance {
+    fn default() -> Self {
+        Self {
+            twist: Twist::default(),
+            covariance: [0.0; 36],
+        }
+    }
+}
+
+/// `nav_msgs/Odometry`: pose in `header.frame_id`, twist in `child_frame_id` (the body).
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct Odometry {
+    /// Stamp and parent frame.
+    pub header: Header,
+    /// The body frame the twist is expressed in.
+    pub child_frame_id: String,
+    /// Pose in the parent frame.
+    pub pose: PoseWithCovariance,
+    /// Velocity in the body frame.
+    pub twist: TwistWithCovariance,
+}
+
+/// `sensor_msgs/LaserScan`. In JSON, `null` (rosbridge's encoding of non-finite numbers) and
+/// the strings `"inf"`, `"-inf"`, `"nan"` are accepted in `ranges` and `intensities`; `null`
+/// reads as `+inf` (no return), the value rosbridge most often stands it in for.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct LaserScan {
+    /// Stamp of the first beam and the sensor frame.
+    pub header: Header,
+    /// Bearing of the first beam, radians.
+    pub angle_min: f32,
+    /// Bearing of the last beam, radians.
+    pub angle_max: f32,
+    /// Bearing step, radians.
+    pub angle_increment: f32,
+    /// Time between beams, seconds.
+    pub time_increment: f32,
+    /// Time between scans, seconds.
+    pub scan_time: f32,
+    /// Shortest measurable range, metres.
+    pub range_min: f32,
+    /// Longest measurable range, metres.
+    pub range_max: f32,
+    /// Ranges, metres (REP 117 for non-finite values).
+    #[serde(with = "lenient_floats")]
+    pub ranges: Vec<f32>,
+    /// Intensities, device units.
+    #[serde(with = "lenient_floats")]
+    pub intensities: Vec<f32>,
+}
+
+/// `cstep_msgs/Empowerment`: the C-STEP score of one state.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct Empowerment {
+    /// The scan's stamp and the odometry frame.
+    pub header: Header,
+    /// `log(free_volume)` in nats, clamped to a documented floor; never NaN or infinite.
+    pub empowerment: f64,
+    /// Volume of the estimated reachable set `R̂` (m² or m³).
+    pub reachable_volume: f64,
+    /// Volume of the estimated terminal set `T̂` inside `R̂`.
+    pub terminal_volume: f64,
+    /// `reachable_volume − terminal_volume` (as estimated).
+    pub free_volume: f64,
+    /// Safety coefficient `c` in effect.
+    pub safety_coefficient: f64,
+    /// Horizon `T`, seconds.
+    pub horizon: f64,
+    /// Trajectories sampled.
+    pub num_trajectories: u32,
+    /// Trajectories that collided.
+    pub num_colliding: u32,
+    /// False when the score is a floor value, not a measurement (see `status`).
+    pub valid: bool,
+    /// "ok", or why the score is not valid.
+    pub status: String,
+}
+
+/// `cstep_msgs/EmpoweredReward`: the reward an RL agent receives for one state.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct EmpoweredReward {
+    /// The scan's stamp and the odometry frame.
+    pub header: Header,
+    /// `task_reward · empowerment_term`.
+    pub reward: f64,
+    /// `exp(−‖p − goal‖)`, or 1 without a goal.
+    pub task_reward: f64,
+    /// `log(c · free_volume)`.
+    pub empowerment_term: f64,
+    /// Safety coefficient `c` in effect.
+    pub safety_coefficient: f64,
+    /// Same as the matching `Empowerment.valid`.
+    pub valid: bool,
+}
+
+/// Float arrays that read JSON's stand-ins for non-finite numbers and pass binary formats
+/// through untouched.
+mod lenient_floats {
+    use serde::de::{self, Deserializer, Visitor};
+    use serde::{Deserialize, Serialize, Serializer};
+
+    pub fn serialize<S: Serializer>(values: &[f32], serializer: S) -> Result<S::Ok, S::Error> {
+        if serializer.is_human_readable() {
+            let shown: Vec<Option<f32>> =
+                values.iter().map(|v| v.is_finite().then_some(*v)).collect();
+            shown.serialize(serializer)
+        } else {
+            values.serialize(serializer)
+        }
+    }
+
+    pub fn deserialize<'de, D: Deserializer<'de>>(deserializer: D) -> Result<Vec<f32>, D::Error> {
+        if deserializer.is_human_readable() {
+            let values = Vec::<Lenient>::deserialize(deserializer)?;
+            Ok(values.into_iter().map(|v| v.0).collect())
+        } else {
+            Vec::<f32>::deserialize(deserializer)
+        }
+    }
+
+    struct Lenient(f32);
+
+    impl<'de> Deserialize<'de> for Lenient {
+        fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+            deserializer.deserialize_any(LenientVisitor)
+        }
+    }
+
+    struct LenientVisitor;
+
+    impl Visitor<'_> for LenientVisitor {
+        type Value = Lenient;
+
+        fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+            f.write_str("a number, null, or one of \"inf\", \"-inf\", \"nan\"")
+        }
+
+        fn visit_f64<E: de::Error>(self, v: f64) -> Result<Lenient, E> {
+            Ok(Lenient(v as f32))
+        }
+
+        fn visit_i64<E: de::Error>(self, v: i64) -> Result<Lenient, E> {
+            Ok(Lenient(v as f32))
+        }
+
+        fn visit_u64<E: de::Error>(self, v: u64) -> Result<Lenient, E> {
+            Ok(Lenient(v as f32))
+        }
+
+        fn visit_unit<E: de::Error>(self) -> Result<Lenient, E> {
+            Ok(Lenient(f32::INFINITY))
+        }
+
+        fn visit_none<E: de::Error>(self) -> Result<Lenient, E> {
+            Ok(Lenient(f32::INFINITY))
+        }
+
+        fn visit_str<E: de::Error>(self, v: &str) -> Result<Lenient, E> {
+            match v.to_ascii_lowercase().as_str() {
+                "inf" | "+inf" | "infinity" | "+infinity" => Ok(Lenient(f32::INFINITY)),
+                "-inf" | "-infinity" => Ok(Lenient(f32::NEG_INFINITY)),
+                "nan" => Ok(Lenient(f32::NAN)),
+                _ => Err(E::invalid_value(de::Unexpected::Str(v), &self)),
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn scan_json_accepts_rosbridge_nulls_and_named_non_finite_values() {
+        let scan: LaserScan =
+            serde_json::from_str(r#"{"ranges":[1.5, null, "-inf", "nan", "inf", 2]}"#).unwrap();
+        assert_eq!(scan.ranges[0], 1.5);
+        assert_eq!(scan.ranges[1], f32::INFINITY);
+        assert_eq!(scan.ranges[2], f32::NEG_INFINITY);
+        assert!(scan.ranges[3].is_nan());
+        assert_eq!(scan.ranges[4], f32::INFINITY);
+        assert_eq!(scan.ranges[5], 2.0);
+        let err = serde_json::from_str::<LaserScan>(r#"{"ranges":["far"]}"#).unwrap_err();
+        assert!(err.to_string().contains("\"far\""), "{err}");
+    }
+
+    #[test]
+    fn partial_odometry_json_fills_ros_defaults() {
+        let odom: Odometry =
+            serde_json::from_str(r#"{"pose":{"pose":{"position":{"x":1.0,"y":2.0}}}}"#).unwrap();
+        assert_eq!(odom.pose.pose.position.x, 1.0);
+        assert_eq!(odom.pose.pose.orientation.w, 1.0);
+        assert_eq!(odom.twist.twist.linear.x, 0.0);
+        assert_eq!(odom.pose.covariance.len(), 36);
+    }
+}

@@ -26,5 +26,6 @@ pub mod reward;
 pub mod rollout;
 pub mod ros;
 pub mod sampling;
+pub mod scene;
 pub mod state;
 pub mod volume;

@@ -1,1 +1,18 @@
-fn main() {}
+//! The `cstep` command: evaluate, benchmark, and (with the node) serve C-STEP.
+
+mod cli;
+
+use std::process::ExitCode;
+
+use clap::Parser;
+
+fn main() -> ExitCode {
+    let command = cli::Cli::parse();
+    match cli::run(command) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(message) => {
+            eprintln!("cstep: error: {message}");
+            ExitCode::FAILURE
+        }
+    }
+}

@@ -155,28 +155,27 @@ impl Occupancy {
     ) -> Self {
         let radius = options.robot_radius.max(0.0);
         let beams = project_beams(scan, attitude);
-        let mut limit = vec![f64::INFINITY; BINS];
-        let mut seen = vec![false; BINS];
         let unknown_limit = match options.unknown_space {
             UnknownSpace::Occupied => 0.0,
             UnknownSpace::Free => f64::INFINITY,
         };
+        let visible_range = |beam: &ProjectedBeam| match beam.kind {
+            Beam::Hit(rho) => rho,
+            Beam::NoReturn => match options.unknown_space {
+                UnknownSpace::Occupied => beam.scale * scan.range_max,
+                UnknownSpace::Free => f64::INFINITY,
+            },
+            Beam::Invalid => unknown_limit,
+        };
         let half_sector = 0.5 * scan.angle_increment.abs();
-        let mut in_collision = false;
+        let mut limit = vec![f64::INFINITY; BINS];
+        let mut seen = vec![false; BINS];
 
-        // Visibility: along each beam's sector the disk's centre stays `radius` inside what the
-        // beam saw.
+        // Radially, the disk's centre stays `radius` inside what each beam's sector saw.
         for beam in &beams {
-            let visible = match beam.kind {
-                Beam::Hit(rho) => rho - radius,
-                Beam::NoReturn => match options.unknown_space {
-                    UnknownSpace::Occupied => beam.scale * scan.range_max - radius,
-                    UnknownSpace::Free => f64::INFINITY,
-                },
-                Beam::Invalid => unknown_limit,
-            };
+            let allowed = (visible_range(beam) - radius).max(0.0);
             for bin in bins_overlapping(beam.bearing - half_sector, beam.bearing + half_sector) {
-                limit[bin] = limit[bin].min(visible.max(0.0));
+                limit[bin] = limit[bin].min(allowed);
                 seen[bin] = true;
             }
         }
@@ -186,48 +185,60 @@ impl Occupancy {
             }
         }
 
-        // Obstacles: the disk must clear every return, and the edges of the shadows returns
-        // cast (an obstacle seen end-on continues behind its visible end).
-        let mut inflate = |rho: f64, bearing: f64| {
-            if rho <= radius {
+        // Laterally, the disk must clear the surfaces the returns lie on and the corners where
+        // the visible range steps down between sectors.
+        let mut in_collision = false;
+        let mut inflate = |x: f64, y: f64| {
+            if x * x + y * y <= radius * radius {
                 in_collision = true;
             } else {
-                inflate_point(&mut limit, rho, bearing, radius);
+                inflate_point(&mut limit, x, y, radius);
             }
         };
+        let full_circle = (beams.len() as f64 + 1.0) * scan.angle_increment.abs() >= 2.0 * PI;
+        let pairs = if full_circle {
+            beams.len()
+        } else {
+            beams.len().saturating_sub(1)
+        };
         for (i, beam) in beams.iter().enumerate() {
-            let Beam::Hit(rho) = beam.kind else { continue };
-            inflate(rho, beam.bearing);
-            // Long arcs (sparse beams, long ranges) get extra points so the disk cannot slip
-            // between returns.
-            let arc_points = ((rho * 2.0 * half_sector) / radius.max(1e-3)).floor() as usize;
-            for k in 1..=arc_points / 2 {
-                let offset = k as f64 * radius / rho;
-                inflate(rho, beam.bearing + offset);
-                inflate(rho, beam.bearing - offset);
+            if let Beam::Hit(rho) = beam.kind {
+                inflate(rho * beam.direction.0, rho * beam.direction.1);
             }
-            for neighbour in [i.wrapping_sub(1), i + 1] {
-                let Some(other) = beams.get(neighbour) else {
-                    continue;
-                };
-                let far = match other.kind {
-                    Beam::Hit(r) => r,
-                    Beam::NoReturn => other.scale * scan.range_max,
-                    Beam::Invalid => continue,
-                };
-                let edge = 0.5 * (beam.bearing + other.bearing);
-                let mut r = rho + radius;
-                while r < far.min(scan.range_max) {
-                    inflate(r, edge);
-                    r += radius.max(1e-3);
+            if i >= pairs {
+                continue;
+            }
+            let next = &beams[(i + 1) % beams.len()];
+            match (beam.kind, next.kind) {
+                (Beam::Hit(a), Beam::Hit(b)) if same_surface(a, b, scan.angle_increment) => {
+                    // Walls are continuous between neighbouring returns: sample the segment
+                    // densely enough (half a radius) that the disk cannot slip through it.
+                    let (ax, ay) = (a * beam.direction.0, a * beam.direction.1);
+                    let (bx, by) = (b * next.direction.0, b * next.direction.1);
+                    let length = ((bx - ax).powi(2) + (by - ay).powi(2)).sqrt();
+                    let pieces = (2.0 * length / radius.max(1e-3)).ceil() as usize;
+                    for k in 1..pieces {
+                        let t = k as f64 / pieces as f64;
+                        inflate(ax + t * (bx - ax), ay + t * (by - ay));
+                    }
+                }
+                _ => {
+                    let corner = visible_range(beam).min(visible_range(next));
+                    if corner > 0.0 && corner.is_finite() {
+                        let bearing = beam.bearing + 0.5 * wrap_angle(next.bearing - beam.bearing);
+                        inflate(corner * bearing.cos(), corner * bearing.sin());
+                    }
                 }
             }
         }
 
-        let (floor, ceiling) = (options.floor, options.ceiling);
         let half_height = 0.5 * options.robot_height.max(0.0);
-        let z_low = floor.map_or(f64::NEG_INFINITY, |f| f - altitude + half_height);
-        let z_high = ceiling.map_or(f64::INFINITY, |c| c - altitude - half_height);
+        let z_low = options
+            .floor
+            .map_or(f64::NEG_INFINITY, |f| f - altitude + half_height);
+        let z_high = options
+            .ceiling
+            .map_or(f64::INFINITY, |c| c - altitude - half_height);
         if z_low > 0.0 || z_high < 0.0 {
             in_collision = true;
         }
@@ -280,49 +291,93 @@ impl Occupancy {
 struct ProjectedBeam {
     kind: Beam,
     bearing: f64,
+    /// Unit direction of the beam's horizontal projection.
+    direction: (f64, f64),
     /// Horizontal length of a unit range along this beam (below 1 when the robot is tilted).
     scale: f64,
 }
 
 fn project_beams(scan: &Scan, attitude: &UnitQuaternion<f64>) -> Vec<ProjectedBeam> {
+    // Beam directions by repeated rotation: one complex multiplication per beam, not a sin/cos.
+    let (step_sin, step_cos) = scan.angle_increment.sin_cos();
+    let (mut sin, mut cos) = scan.angle_min.sin_cos();
     (0..scan.ranges.len())
         .map(|i| {
-            let a = scan.angle_min + i as f64 * scan.angle_increment;
-            let direction = attitude * Vector3::new(a.cos(), a.sin(), 0.0);
-            let scale = direction.xy().norm();
+            let world = attitude * Vector3::new(cos, sin, 0.0);
+            (sin, cos) = (
+                sin * step_cos + cos * step_sin,
+                cos * step_cos - sin * step_sin,
+            );
+            let scale = world.xy().norm();
             let kind = match scan.beam(i) {
                 Beam::Hit(r) => Beam::Hit(r * scale),
                 other => other,
             };
+            let inv = if scale > 0.0 { 1.0 / scale } else { 0.0 };
             ProjectedBeam {
                 kind,
-                bearing: direction.y.atan2(direction.x),
+                bearing: world.y.atan2(world.x),
+                direction: (world.x * inv, world.y * inv),
                 scale,
             }
         })
         .collect()
 }
 
-/// Lowers the limits of the bins a disk of `radius` around the obstacle point
-/// (`rho`, `bearing`) blocks: along a ray at angular distance δ from the point, the disk's centre
-/// touches it at `rho·cos δ − sqrt(radius² − rho²·sin² δ)`.
-fn inflate_point(limit: &mut [f64], rho: f64, bearing: f64, radius: f64) {
-    let half_width = (radius / rho).asin();
-    for bin in bins_overlapping(bearing - half_width, bearing + half_width) {
-        let delta = angular_distance_to_bin(bearing, bin);
-        let lateral = rho * delta.sin();
-        if lateral < radius {
-            let contact = rho * delta.cos() - (radius * radius - lateral * lateral).sqrt();
-            limit[bin] = limit[bin].min(contact.max(0.0));
-        }
-    }
+/// Whether two neighbouring returns lie on one surface: the adaptive breakpoint test (Borges &
+/// Aldon, 2004) — their gap is no larger than a surface seen at 10° incidence would leave,
+/// plus three times a 1 cm range noise.
+fn same_surface(a: f64, b: f64, angle_increment: f64) -> bool {
+    const MIN_INCIDENCE: f64 = 10.0 * PI / 180.0;
+    const RANGE_SIGMA: f64 = 0.01;
+    let step = angle_increment.abs();
+    let gap_sq = a * a + b * b - 2.0 * a * b * step.cos();
+    let allowed =
+        a.min(b) * step.sin() / (MIN_INCIDENCE - step).sin().max(1e-6) + 3.0 * RANGE_SIGMA;
+    gap_sq <= allowed * allowed
 }
 
-/// Smallest angle between `bearing` and any bearing inside bin `bin`.
-fn angular_distance_to_bin(bearing: f64, bin: usize) -> f64 {
-    let start = -PI + bin as f64 * BIN_WIDTH;
-    let centre_offset = wrap_angle(bearing - (start + 0.5 * BIN_WIDTH)).abs();
-    (centre_offset - 0.5 * BIN_WIDTH).max(0.0)
+/// Unit directions of the bin edges: edge `k` is the bearing `−π + k·BIN_WIDTH`.
+fn bin_edges() -> &'static [(f64, f64)] {
+    static EDGES: std::sync::OnceLock<Vec<(f64, f64)>> = std::sync::OnceLock::new();
+    EDGES.get_or_init(|| {
+        (0..=BINS)
+            .map(|k| {
+                let (s, c) = (-PI + k as f64 * BIN_WIDTH).sin_cos();
+                (c, s)
+            })
+            .collect()
+    })
+}
+
+/// Lowers the limits of the bins whose rays bring the robot's disk onto the obstacle point
+/// `(x, y)`. Along a ray of direction `u`, the disk's centre first touches the point at
+/// `t − sqrt(r² − s²)` with `t = p·u` and `s² = |p|² − t²`; within a bin the worst ray is the
+/// edge nearest the point, so each bin costs a dot product and a square root, no trigonometry.
+fn inflate_point(limit: &mut [f64], x: f64, y: f64, radius: f64) {
+    let rho_sq = x * x + y * y;
+    let r_sq = radius * radius;
+    let home = ((y.atan2(x) + PI) / BIN_WIDTH).floor() as isize;
+    let home_bin = home.rem_euclid(BINS as isize) as usize;
+    limit[home_bin] = limit[home_bin].min((rho_sq.sqrt() - radius).max(0.0));
+    let edges = bin_edges();
+    // Walk away from the point in both directions until rays pass farther than `radius`.
+    for direction in [1isize, -1] {
+        for step in 1..BINS as isize / 2 {
+            let bin = home + direction * step;
+            // Nearest edge: the bin's left edge when walking up, its right edge when walking down.
+            let edge =
+                (if direction > 0 { bin } else { bin + 1 }).rem_euclid(BINS as isize) as usize;
+            let (ux, uy) = edges[edge];
+            let t = x * ux + y * uy;
+            let s_sq = rho_sq - t * t;
+            if t <= 0.0 || s_sq >= r_sq {
+                break;
+            }
+            let b = bin.rem_euclid(BINS as isize) as usize;
+            limit[b] = limit[b].min((t - (r_sq - s_sq).sqrt()).max(0.0));
+        }
+    }
 }
 
 /// The bins that overlap the bearing interval `[from, to]` (`to − from < 2π`), wrapping at ±π.
@@ -454,6 +509,45 @@ mod tests {
         let free = Occupancy::build(&scan, &level(), 1.0, &opts);
         assert!(free.is_free(5.0, 0.0, 0.0));
         assert!(free.is_free(-0.5, 0.0, 0.0));
+    }
+
+    #[test]
+    fn an_oblique_wall_keeps_the_disk_a_radius_away_even_between_sparse_beams() {
+        // Wall x = 1 seen by 90 beams (4° apart): returns up to 30 cm apart along the wall.
+        let scene = crate::scene::Scene::open().wall(1.0, -50.0, 1.0, 50.0);
+        let lidar = crate::scene::Lidar {
+            beams: 90,
+            range_min: 0.02,
+            range_max: 10.0,
+        };
+        let scan = scene.scan(nalgebra::Vector2::zeros(), &level(), &lidar);
+        let radius = 0.1;
+        let mut opts = options(radius);
+        opts.unknown_space = UnknownSpace::Free;
+        let occupancy = Occupancy::build(&scan, &level(), 1.0, &opts);
+        let (mut free_near, mut free_far, mut far) = (0, 0, 0);
+        for i in 0..400 {
+            for j in 0..400 {
+                let (x, y) = (-1.0 + i as f32 * 0.005, -2.0 + j as f32 * 0.01);
+                let free = occupancy.is_free(x, y, 0.0);
+                let gap = 1.0 - x;
+                if gap < radius as f32 * 0.97 {
+                    free_near += usize::from(free);
+                }
+                if gap > radius as f32 + 0.03 {
+                    far += 1;
+                    free_far += usize::from(free);
+                }
+            }
+        }
+        assert_eq!(
+            free_near, 0,
+            "disk centres closer than the radius to the wall"
+        );
+        assert!(
+            free_far as f64 > 0.97 * far as f64,
+            "{free_far} of {far} clear points free"
+        );
     }
 
     #[test]

@@ -1,0 +1,171 @@
+//! `cstep bench`: evaluation speed on a fixed scene, as medians over repeated runs.
+//!
+//! The scene is the paper's setting at its hardest for the checker: a 2.5 m corridor closed
+//! 2.5 m ahead, a 360-beam scan, the robot flying at 1 m/s toward the end wall, so both free
+//! and terminal trajectories occur and every stage (sampling, rollout with path-wise checks,
+//! hulls, clustering, union) runs. By default one core, as the targets in the README are stated.
+
+use std::time::{Duration, Instant};
+
+use nalgebra::{UnitQuaternion, Vector2, Vector3};
+use serde::Serialize;
+
+use cstep::config::Settings;
+use cstep::estimator::Estimator;
+use cstep::scene::{Lidar, Scene};
+use cstep::state::RobotState;
+
+use super::Format;
+
+/// Arguments of `cstep bench`.
+#[derive(Debug, clap::Args)]
+pub struct BenchArgs {
+    /// Output format.
+    #[arg(long, value_enum, default_value = "text")]
+    format: Format,
+    /// Model to measure (quadrotor | point_mass); default: the standard rows.
+    #[arg(long)]
+    model: Option<String>,
+    /// Trajectories per evaluation.
+    #[arg(long)]
+    trajectories: Option<usize>,
+    /// Integration steps per trajectory.
+    #[arg(long)]
+    steps: Option<usize>,
+    /// Threads for the rollout (the targets are for one core).
+    #[arg(long, default_value_t = 1)]
+    threads: usize,
+    /// Seconds to spend measuring each row.
+    #[arg(long, default_value_t = 2.0)]
+    seconds: f64,
+    /// Draw a new control sample every evaluation instead of reusing the seed's (the node reuses it).
+    #[arg(long)]
+    fresh_samples: bool,
+    /// Parameter override, `name:=value` (repeatable), e.g. `-p estimator:=free_fraction`.
+    #[arg(short = 'p', long = "param", value_name = "NAME:=VALUE")]
+    params: Vec<String>,
+}
+
+/// One row of the speed table (the JSON contract).
+#[derive(Debug, Serialize)]
+struct Row {
+    model: String,
+    trajectories: usize,
+    steps: usize,
+    median_us: f64,
+    p99_us: f64,
+    evals_per_s: f64,
+}
+
+/// Runs `cstep bench`.
+pub fn run(args: BenchArgs) -> Result<(), String> {
+    let rows: Vec<(String, usize, usize)> =
+        if args.model.is_none() && args.trajectories.is_none() && args.steps.is_none() {
+            vec![
+                ("point_mass".into(), 150, 100),
+                ("quadrotor".into(), 150, 100),
+                ("quadrotor".into(), 2000, 100),
+            ]
+        } else {
+            vec![(
+                args.model.clone().unwrap_or_else(|| "quadrotor".into()),
+                args.trajectories.unwrap_or(150),
+                args.steps.unwrap_or(100),
+            )]
+        };
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(args.threads.max(1))
+        .build()
+        .map_err(|e| format!("cannot start {} threads: {e}", args.threads))?;
+    let mut table = Vec::new();
+    for (model, trajectories, steps) in rows {
+        let mut overrides = vec![
+            format!("model:={model}"),
+            format!("trajectories:={trajectories}"),
+            format!("steps:={steps}"),
+        ];
+        overrides.extend(args.params.iter().cloned());
+        let settings = Settings::load(None, "cstep_node", &overrides).map_err(|e| e.to_string())?;
+        let estimator = Estimator::from_settings(&settings).map_err(|e| e.to_string())?;
+        let row = pool.install(|| measure(&estimator, &model, &args));
+        if args.format == Format::Text {
+            eprintln!(
+                "  {model} {trajectories}×{steps}: {} evaluations",
+                (row.evals_per_s * args.seconds).round()
+            );
+        }
+        table.push(row);
+    }
+    match args.format {
+        Format::Json => println!(
+            "{}",
+            serde_json::to_string_pretty(&table).map_err(|e| e.to_string())?
+        ),
+        Format::Text => {
+            println!(
+                "{:<11} {:>12} {:>6} {:>10} {:>10} {:>12}",
+                "model", "trajectories", "steps", "median_us", "p99_us", "evals_per_s"
+            );
+            for r in &table {
+                println!(
+                    "{:<11} {:>12} {:>6} {:>10.1} {:>10.1} {:>12.0}",
+                    r.model, r.trajectories, r.steps, r.median_us, r.p99_us, r.evals_per_s
+                );
+            }
+            println!(
+                "scene: 2.5 m corridor closed 2.5 m ahead, 360-beam scan, 1 m/s toward the wall; {} thread(s); {}",
+                args.threads,
+                if args.fresh_samples { "fresh control sample each evaluation" } else { "control sample reused per seed, as in the node" }
+            );
+        }
+    }
+    Ok(())
+}
+
+/// The benchmark scene's state and scan.
+fn scene() -> (RobotState, cstep::occupancy::Scan) {
+    let scene = Scene::corridor(2.5, 20.0).wall(2.5, -1.25, 2.5, 1.25);
+    let lidar = Lidar {
+        beams: 360,
+        range_min: 0.02,
+        range_max: 3.0,
+    };
+    let attitude = UnitQuaternion::identity();
+    let state =
+        RobotState::at_rest(Vector3::new(0.0, 0.3, 1.0)).with_velocity(Vector3::new(1.0, 0.0, 0.0));
+    (state, scene.scan(Vector2::new(0.0, 0.3), &attitude, &lidar))
+}
+
+fn measure(estimator: &Estimator, model: &str, args: &BenchArgs) -> Row {
+    let (state, scan) = scene();
+    let budget = Duration::from_secs_f64(args.seconds.max(0.1));
+    let mut seed = estimator.settings().seed;
+    let mut evaluate = || {
+        if args.fresh_samples {
+            seed = seed.wrapping_add(1);
+        }
+        let started = Instant::now();
+        std::hint::black_box(estimator.evaluate_with_seed(&state, &scan, seed));
+        started.elapsed()
+    };
+    for _ in 0..5 {
+        evaluate();
+    }
+    let started = Instant::now();
+    let mut samples = Vec::new();
+    while (started.elapsed() < budget || samples.len() < 20) && samples.len() < 200_000 {
+        samples.push(evaluate().as_secs_f64() * 1e6);
+    }
+    let total = started.elapsed().as_secs_f64();
+    samples.sort_by(f64::total_cmp);
+    let quantile = |q: f64| samples[((samples.len() - 1) as f64 * q).round() as usize];
+    let s = estimator.settings();
+    Row {
+        model: model.to_owned(),
+        trajectories: s.trajectories,
+        steps: s.steps,
+        median_us: quantile(0.5),
+        p99_us: quantile(0.99),
+        evals_per_s: samples.len() as f64 / total,
+    }
+}

@@ -1,0 +1,39 @@
+//! Command-line interface: one file per subcommand.
+
+mod bench;
+mod eval;
+
+use clap::{Parser, Subcommand};
+
+/// C-STEP: continuous space-time empowerment, a physics-informed safety score for mobile robots.
+#[derive(Debug, Parser)]
+#[command(name = "cstep", version, about)]
+pub struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// Evaluate C-STEP once, offline, for an odometry and a scan message given as JSON.
+    Eval(eval::EvalArgs),
+    /// Measure evaluation speed on a fixed scene (one core unless --threads says otherwise).
+    Bench(bench::BenchArgs),
+}
+
+/// Runs a parsed command line; the error is one line for the user.
+pub fn run(cli: Cli) -> Result<(), String> {
+    match cli.command {
+        Command::Eval(args) => eval::run(args),
+        Command::Bench(args) => bench::run(args),
+    }
+}
+
+/// Output formats shared by the subcommands.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+pub enum Format {
+    /// Human-readable text.
+    Text,
+    /// Machine-readable JSON.
+    Json,
+}

@@ -1,19 +1,14 @@
 //! `cstep bench`: evaluation speed on a fixed scene, as medians over repeated runs.
 //!
-//! The scene is the paper's setting at its hardest for the checker: a 2.5 m corridor closed
-//! 2.5 m ahead, a 360-beam scan, the robot flying at 1 m/s toward the end wall, so both free
-//! and terminal trajectories occur and every stage (sampling, rollout with path-wise checks,
-//! hulls, clustering, union) runs. By default one core, as the targets in the README are stated.
+//! The scene is [`cstep::scene::benchmark_case`]; by default one core, as the targets in the
+//! README are stated.
 
 use std::time::{Duration, Instant};
 
-use nalgebra::{UnitQuaternion, Vector2, Vector3};
 use serde::Serialize;
 
 use cstep::config::Settings;
 use cstep::estimator::Estimator;
-use cstep::scene::{Lidar, Scene};
-use cstep::state::RobotState;
 
 use super::Format;
 
@@ -122,22 +117,8 @@ pub fn run(args: BenchArgs) -> Result<(), String> {
     Ok(())
 }
 
-/// The benchmark scene's state and scan.
-fn scene() -> (RobotState, cstep::occupancy::Scan) {
-    let scene = Scene::corridor(2.5, 20.0).wall(2.5, -1.25, 2.5, 1.25);
-    let lidar = Lidar {
-        beams: 360,
-        range_min: 0.02,
-        range_max: 3.0,
-    };
-    let attitude = UnitQuaternion::identity();
-    let state =
-        RobotState::at_rest(Vector3::new(0.0, 0.3, 1.0)).with_velocity(Vector3::new(1.0, 0.0, 0.0));
-    (state, scene.scan(Vector2::new(0.0, 0.3), &attitude, &lidar))
-}
-
 fn measure(estimator: &Estimator, model: &str, args: &BenchArgs) -> Row {
-    let (state, scan) = scene();
+    let (state, scan) = cstep::scene::benchmark_case();
     let budget = Duration::from_secs_f64(args.seconds.max(0.1));
     let mut seed = estimator.settings().seed;
     let mut evaluate = || {

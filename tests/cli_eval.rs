@@ -1,0 +1,283 @@
+//! `cstep eval` end to end through the binary: valid output, and one clear line (never a panic)
+//! for every kind of bad input.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use cstep::ros::messages::{LaserScan, Odometry};
+use cstep::scene::{Lidar, Scene};
+use nalgebra::{UnitQuaternion, Vector2};
+use serde_json::Value;
+
+fn workdir(tag: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("cstep-cli-{tag}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn config() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("config/cstep.yaml")
+}
+
+fn corridor_scan() -> LaserScan {
+    let scan = Scene::corridor(2.0, 20.0).scan(
+        Vector2::new(0.0, 0.2),
+        &UnitQuaternion::identity(),
+        &Lidar::PAPER,
+    );
+    LaserScan {
+        angle_min: scan.angle_min as f32,
+        angle_max: (scan.angle_min + scan.angle_increment * (scan.ranges.len() - 1) as f64) as f32,
+        angle_increment: scan.angle_increment as f32,
+        range_min: scan.range_min as f32,
+        range_max: scan.range_max as f32,
+        ranges: scan.ranges,
+        ..Default::default()
+    }
+}
+
+fn odometry() -> Odometry {
+    let mut odom = Odometry::default();
+    odom.header.frame_id = "odom".into();
+    odom.pose.pose.position.y = 0.2;
+    odom.pose.pose.position.z = 1.0;
+    odom.twist.twist.linear.x = 0.5;
+    odom
+}
+
+fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
+    let path = dir.join(name);
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+fn eval(odom: &Path, scan: &Path, extra: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_cstep"))
+        .arg("eval")
+        .arg("--config")
+        .arg(config())
+        .arg("--odom")
+        .arg(odom)
+        .arg("--scan")
+        .arg(scan)
+        .args(extra)
+        .output()
+        .expect("cstep runs")
+}
+
+fn json_of(output: &Output) -> Value {
+    assert!(
+        output.status.success(),
+        "{}",
+        String::from_utf8_lossy(&output.stderr)
+    );
+    serde_json::from_slice(&output.stdout).expect("one JSON object")
+}
+
+/// Asserts a failure with one line on stderr naming `file` and containing `words`, no panic.
+fn assert_clear_error(output: &Output, file: &str, words: &str) {
+    let stderr = String::from_utf8_lossy(&output.stderr);
+    assert!(!output.status.success(), "should fail: {stderr}");
+    assert!(!stderr.contains("panicked"), "{stderr}");
+    assert_eq!(stderr.trim().lines().count(), 1, "one line: {stderr}");
+    assert!(stderr.contains(file), "names {file}: {stderr}");
+    assert!(stderr.contains(words), "says {words}: {stderr}");
+}
+
+#[test]
+fn json_output_has_every_message_field_and_finite_values() {
+    let dir = workdir("ok");
+    let odom = write(
+        &dir,
+        "odom.json",
+        &serde_json::to_string(&odometry()).unwrap(),
+    );
+    let scan = write(
+        &dir,
+        "scan.json",
+        &serde_json::to_string(&corridor_scan()).unwrap(),
+    );
+    let out = json_of(&eval(
+        &odom,
+        &scan,
+        &["--format", "json", "--goal", "3,0.2,1"],
+    ));
+    for field in [
+        "header",
+        "empowerment",
+        "reachable_volume",
+        "terminal_volume",
+        "free_volume",
+        "safety_coefficient",
+        "horizon",
+        "num_trajectories",
+        "num_colliding",
+        "valid",
+        "status",
+        "reward",
+        "task_reward",
+    ] {
+        assert!(out.get(field).is_some(), "missing {field} in {out}");
+    }
+    assert_eq!(out["valid"], true);
+    assert_eq!(out["num_trajectories"], 150);
+    assert_eq!(out["header"]["frame_id"], "odom");
+    let task = out["task_reward"].as_f64().unwrap();
+    assert!((task - (-3.0f64).exp()).abs() < 1e-9, "{task}");
+    let (e, reward) = (
+        out["empowerment"].as_f64().unwrap(),
+        out["reward"].as_f64().unwrap(),
+    );
+    assert!(e.is_finite() && reward.is_finite());
+    assert!((reward - task * (1.0f64.ln() + e)).abs() < 1e-9);
+    // The same input and seed give the same answer; -p reaches the estimator.
+    let again = json_of(&eval(
+        &odom,
+        &scan,
+        &["--format", "json", "--goal", "3,0.2,1"],
+    ));
+    assert_eq!(out, again);
+    let cautious = json_of(&eval(
+        &odom,
+        &scan,
+        &["--format", "json", "-p", "safety_coefficient:=0.5"],
+    ));
+    assert_eq!(cautious["safety_coefficient"], 0.5);
+    assert!((cautious["empowerment"].as_f64().unwrap() - e).abs() < 1e-12);
+    let text = eval(&odom, &scan, &[]);
+    assert!(String::from_utf8_lossy(&text.stdout).contains("empowerment"));
+}
+
+#[test]
+fn rosbridge_nulls_in_ranges_are_accepted() {
+    let dir = workdir("nulls");
+    let odom = write(
+        &dir,
+        "odom.json",
+        r#"{"pose":{"pose":{"position":{"x":0,"y":0,"z":1}}}}"#,
+    );
+    let mut scan: Value = serde_json::to_value(corridor_scan()).unwrap();
+    scan["ranges"][0] = Value::Null;
+    let scan = write(&dir, "scan.json", &scan.to_string());
+    let out = json_of(&eval(&odom, &scan, &["--format", "json"]));
+    assert_eq!(out["valid"], true);
+}
+
+#[test]
+fn malformed_inputs_fail_with_one_line_naming_file_and_field() {
+    let dir = workdir("bad");
+    let good_odom = write(
+        &dir,
+        "odom.json",
+        &serde_json::to_string(&odometry()).unwrap(),
+    );
+    let good_scan = write(
+        &dir,
+        "scan.json",
+        &serde_json::to_string(&corridor_scan()).unwrap(),
+    );
+
+    let broken = write(&dir, "broken.json", "{\"ranges\": [1.0, 2.0");
+    assert_clear_error(
+        &eval(&good_odom, &broken, &[]),
+        "broken.json",
+        "not a valid message",
+    );
+
+    let mut short = corridor_scan();
+    short.ranges.truncate(100);
+    let short = write(&dir, "short.json", &serde_json::to_string(&short).unwrap());
+    assert_clear_error(
+        &eval(&good_odom, &short, &[]),
+        "short.json",
+        "ranges: has 100 values",
+    );
+
+    let mut flat = corridor_scan();
+    flat.angle_increment = 0.0;
+    let flat = write(&dir, "flat.json", &serde_json::to_string(&flat).unwrap());
+    assert_clear_error(
+        &eval(&good_odom, &flat, &[]),
+        "flat.json",
+        "angle_increment",
+    );
+
+    let mut zero = odometry();
+    zero.pose.pose.orientation.w = 0.0;
+    let zero = write(&dir, "zero.json", &serde_json::to_string(&zero).unwrap());
+    assert_clear_error(
+        &eval(&zero, &good_scan, &[]),
+        "zero.json",
+        "zero quaternion",
+    );
+
+    let nan = write(
+        &dir,
+        "nan.json",
+        r#"{"pose":{"pose":{"position":{"x":"nan"}}}}"#,
+    );
+    assert_clear_error(
+        &eval(&nan, &good_scan, &[]),
+        "nan.json",
+        "not a valid message",
+    );
+
+    let missing = dir.join("missing.json");
+    assert_clear_error(
+        &eval(&missing, &good_scan, &[]),
+        "missing.json",
+        "cannot read",
+    );
+
+    assert_clear_error(
+        &eval(&good_odom, &good_scan, &["-p", "horizon:=-2"]),
+        "command line",
+        "'horizon' must be a positive number",
+    );
+    assert_clear_error(
+        &eval(&good_odom, &good_scan, &["--goal", "1,x"]),
+        "--goal",
+        "X,Y[,Z]",
+    );
+
+    let urdf = write(
+        &dir,
+        "bad.urdf",
+        "<robot name=\"x\"><link name=\"base\"/></robot>",
+    );
+    let p = format!("robot_description:={}", urdf.display());
+    let out = eval(&good_odom, &good_scan, &["-p", &p]);
+    assert_clear_error(&out, "bad.urdf", "");
+}
+
+#[test]
+fn degenerate_but_well_formed_inputs_answer_valid_false() {
+    let dir = workdir("degenerate");
+    let odom = write(
+        &dir,
+        "odom.json",
+        &serde_json::to_string(&odometry()).unwrap(),
+    );
+    let mut empty = corridor_scan();
+    empty.ranges.clear();
+    let empty = write(&dir, "empty.json", &serde_json::to_string(&empty).unwrap());
+    let out = json_of(&eval(&odom, &empty, &["--format", "json"]));
+    assert_eq!(out["valid"], false);
+    assert_eq!(out["status"], "scan has no beams");
+    assert!(out["empowerment"].as_f64().unwrap().is_finite());
+
+    let mut blind = corridor_scan();
+    blind.ranges.iter_mut().for_each(|r| *r = f32::NAN);
+    let blind = write(
+        &dir,
+        "blind.json",
+        &serde_json::to_string(&blind)
+            .unwrap()
+            .replace("null", "\"nan\""),
+    );
+    let out = json_of(&eval(&odom, &blind, &["--format", "json"]));
+    assert_eq!(out["valid"], false);
+    assert_eq!(out["status"], "scan has no valid beams");
+}

@@ -1,0 +1,43 @@
+//! Helpers shared by the integration tests: estimators from parameter overrides, and scans of
+//! simple scenes.
+#![allow(dead_code)]
+
+use cstep::config::Settings;
+use cstep::estimator::{Estimate, Estimator};
+use cstep::occupancy::Scan;
+use cstep::scene::{Lidar, Scene};
+use cstep::state::RobotState;
+use nalgebra::{UnitQuaternion, Vector2, Vector3};
+
+/// An estimator from the built-in defaults plus `name:=value` overrides.
+pub fn estimator(overrides: &[&str]) -> Estimator {
+    let overrides: Vec<String> = overrides.iter().map(|s| s.to_string()).collect();
+    let settings = Settings::load(None, "cstep_node", &overrides).expect("valid overrides");
+    Estimator::from_settings(&settings).expect("the built-in robot loads")
+}
+
+/// A 360-beam, 10 m scan of `scene` from `position` (level, facing +x).
+pub fn scan_of(scene: &Scene, position: Vector2<f64>) -> Scan {
+    let lidar = Lidar {
+        beams: 360,
+        range_min: 0.02,
+        range_max: 10.0,
+    };
+    scene.scan(position, &UnitQuaternion::identity(), &lidar)
+}
+
+/// The paper's LiDAR (180 beams, 3 m) scanning `scene` from `position`.
+pub fn paper_scan(scene: &Scene, position: Vector2<f64>) -> Scan {
+    scene.scan(position, &UnitQuaternion::identity(), &Lidar::PAPER)
+}
+
+/// A robot at rest at `(x, y)` at 1 m altitude.
+pub fn at(x: f64, y: f64) -> RobotState {
+    RobotState::at_rest(Vector3::new(x, y, 1.0))
+}
+
+/// Evaluates the paper's drone at rest at `(x, y)` in `scene` with the paper's LiDAR.
+pub fn score(estimator: &Estimator, scene: &Scene, state: &RobotState) -> Estimate {
+    let scan = paper_scan(scene, state.position.xy());
+    estimator.evaluate(state, &scan)
+}

@@ -106,7 +106,8 @@ pub struct RobotDescription {
     /// Maximum flight speed, m/s (`max_speed_kmh` / 3.6).
     pub max_speed: f64,
     /// Body-frame linear drag coefficients (x, y, z): the drag force on axis i is
-    /// −c_i · (Σ rotor speeds in rad/s) · v_i, N per (m/s · rad/s).
+    /// −c_i · (Σ rotor speeds in rad/s) · v_i, N per (m/s · rad/s). x and y are equal (the
+    /// URDF gives one horizontal coefficient, `drag_coeff_xy`).
     pub drag_coefficients: Vector3<f64>,
     /// Ground-effect coefficient (kept for simulators that model it; rollouts do not, as they
     /// know no floor distance).

@@ -8,12 +8,12 @@
 //! - **Hull** — the paper: R̂ = convex hull of *all* endpoints (free and terminal), T̂ = the
 //!   *union* of the convex hulls of clustered terminal endpoints. Clusters live in position
 //!   space only and are linked through the full endpoint set, so they never bridge free space
-//!   ([`cluster`]); overlapping hulls are united, not summed ([`union`]).
+//!   (`cluster.rs`); overlapping hulls are united, not summed (`union.rs`).
 //! - **Efron** — Hull with the hull's sampling bias removed by Efron's identity: the hull of n
 //!   uniform samples misses a share v/(n+1) of the body (v hull vertices); −12 % for a disk and
 //!   −32 % for a ball at n = 150 without it.
 //! - **FreeFraction** — the Efron-corrected reachable volume times the share of R̂ whose nearest
-//!   endpoint is free ([`free_fraction`]); unlike hull subtraction it handles non-convex
+//!   endpoint is free (`free_fraction.rs`); unlike hull subtraction it handles non-convex
 //!   obstacles.
 //!
 //! Conventions: endpoints are in metres; [`VolumeDims::Two`] uses only x and y. Endpoints with
@@ -21,7 +21,7 @@
 //! rollout carries no position information — and `terminal` labels go with the points they
 //! index (a point without a label counts as free). Every output is finite and ≥ 0 with
 //! `free ≤ reachable`; clouds that span no volume (empty, too few points, all equal, collinear
-//! in 2D, coplanar in 3D — see [`frame::FLAT_RATIO`]) give all zeros. Nothing here panics.
+//! in 2D, coplanar in 3D — thinner than 1e-9 of their width, see `frame.rs`) give all zeros. Nothing here panics.
 
 mod cluster;
 mod frame;
@@ -281,7 +281,12 @@ fn estimate_with<B: ConvexBody>(cloud: &Cloud, kind: EstimatorKind) -> Volumes {
 /// Volume of the union of the terminal clusters' hulls, and the number of clusters.
 fn terminal_union<B: ConvexBody>(cloud: &Cloud) -> (f64, usize) {
     let grid = NeighbourGrid::new(&cloud.points, cloud.dims);
-    let clusters = cluster::cluster_terminal(&grid, &cloud.points, &cloud.terminal, cloud.dims);
+    let clusters = cluster::cluster_terminal(
+        &grid,
+        &cloud.points,
+        &cloud.terminal,
+        cluster::LINK_NEIGHBOURS,
+    );
     let mut scratch = Vec::new();
     let mut hulls = Vec::new();
     for members in clusters.iter() {

@@ -1,0 +1,513 @@
+//! Convex hulls in 2D ([`Polygon`]) and 3D ([`Polyhedron`]), their exact volumes, and Efron's
+//! de-biasing factor.
+//!
+//! Hulls come from parry's quickhull, run on whitened coordinates ([`Frame`]) so that thin or
+//! far-off clouds stay well conditioned. Degenerate clouds (too few points, duplicates only,
+//! collinear / coplanar within [`super::frame::FLAT_RATIO`]) have no hull: the constructors return
+//! `None`, which callers read as volume 0.
+
+use parry2d_f64::math::Vector2;
+use parry3d_f64::math::Vector3;
+
+use super::frame::Frame;
+
+/// Efron's identity: the expected volume of the hull of `n` uniform samples from a convex body K
+/// is `λ(K) · (1 − E[v_{n+1}] / (n + 1))`, `v` the number of hull vertices. Dividing a hull
+/// volume by `1 − v/(n+1)` therefore removes the hull's systematic under-estimate (−12 % for a
+/// disk and −32 % for a ball at n = 150) at the cost of counting vertices.
+///
+/// `v ≤ n` always holds for a hull, so the factor lies in `[1, n + 1]`.
+pub(crate) fn efron_factor(vertices: usize, points: usize) -> f64 {
+    let n1 = points as f64 + 1.0;
+    let v = (vertices as f64).min(points as f64);
+    n1 / (n1 - v)
+}
+
+/// A straight piece of a polygon's boundary over a vertical line: `y(x') = y + slope · (x' − x)`
+/// near the `x` at which it was taken.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct Line {
+    /// Boundary height at the query abscissa.
+    pub(crate) y: f64,
+    /// dy/dx of the boundary edge.
+    pub(crate) slope: f64,
+}
+
+/// The convex hull of a planar cloud: counter-clockwise vertices in world coordinates.
+#[derive(Debug, Clone)]
+pub(crate) struct Polygon {
+    vertices: Vec<[f64; 2]>,
+    area: f64,
+    lo: [f64; 2],
+    hi: [f64; 2],
+}
+
+impl Polygon {
+    /// Convex hull of the `x, y` coordinates of `points`; `None` if they span no area.
+    pub(crate) fn hull(points: &[[f64; 3]]) -> Option<Polygon> {
+        let frame = Frame::fit(points, 2)?;
+        let unit: Vec<Vector2> = points
+            .iter()
+            .map(|p| {
+                let u = frame.to_unit(p);
+                Vector2::new(u[0], u[1])
+            })
+            .collect();
+        // `fit` guarantees at least two distinct points, parry's only precondition.
+        let idx = parry2d_f64::transformation::convex_hull_idx(&unit);
+        if idx.len() < 3 {
+            return None;
+        }
+        let unit_area = shoelace(idx.iter().map(|&i| [unit[i].x, unit[i].y]));
+        let area = unit_area.abs() * frame.det();
+        if !(area.is_finite() && area > 0.0) {
+            return None;
+        }
+        let mut vertices: Vec<[f64; 2]> =
+            idx.iter().map(|&i| [points[i][0], points[i][1]]).collect();
+        // The whitening map may mirror the plane; store world vertices counter-clockwise.
+        if shoelace(vertices.iter().copied()) < 0.0 {
+            vertices.reverse();
+        }
+        let mut lo = vertices[0];
+        let mut hi = vertices[0];
+        for v in &vertices {
+            for a in 0..2 {
+                lo[a] = lo[a].min(v[a]);
+                hi[a] = hi[a].max(v[a]);
+            }
+        }
+        Some(Polygon {
+            vertices,
+            area,
+            lo,
+            hi,
+        })
+    }
+
+    /// Area of the polygon (m²).
+    pub(crate) fn area(&self) -> f64 {
+        self.area
+    }
+
+    /// Number of hull vertices.
+    pub(crate) fn vertex_count(&self) -> usize {
+        self.vertices.len()
+    }
+
+    /// Hull vertices, counter-clockwise.
+    pub(crate) fn vertices(&self) -> &[[f64; 2]] {
+        &self.vertices
+    }
+
+    /// Lower corner of the bounding box.
+    pub(crate) fn lo(&self) -> [f64; 2] {
+        self.lo
+    }
+
+    /// Upper corner of the bounding box.
+    pub(crate) fn hi(&self) -> [f64; 2] {
+        self.hi
+    }
+
+    /// The lower and upper boundary edges over the vertical line at `x`, or `None` outside
+    /// `[min x, max x)`. Edges are taken half-open in x so that consecutive edges of a chain
+    /// never both claim one abscissa; vertical edges never do.
+    pub(crate) fn boundary_at(&self, x: f64) -> Option<[Line; 2]> {
+        let mut lower = None;
+        let mut upper = None;
+        let n = self.vertices.len();
+        for i in 0..n {
+            let a = self.vertices[i];
+            let b = self.vertices[(i + 1) % n];
+            // Counter-clockwise: the lower chain runs left → right, the upper right → left.
+            let (l, r, is_lower) = if a[0] < b[0] {
+                (a, b, true)
+            } else if b[0] < a[0] {
+                (b, a, false)
+            } else {
+                continue;
+            };
+            if l[0] <= x && x < r[0] {
+                let slope = (r[1] - l[1]) / (r[0] - l[0]);
+                let line = Line {
+                    y: l[1] + slope * (x - l[0]),
+                    slope,
+                };
+                if is_lower {
+                    lower = Some(line);
+                } else {
+                    upper = Some(line);
+                }
+            }
+        }
+        Some([lower?, upper?])
+    }
+}
+
+/// Twice-halved shoelace sum: signed area of the closed polygon through `vertices`, taken
+/// relative to its first vertex for precision far from the origin.
+fn shoelace(vertices: impl Iterator<Item = [f64; 2]>) -> f64 {
+    let mut it = vertices;
+    let Some(o) = it.next() else { return 0.0 };
+    let mut prev = [0.0, 0.0];
+    let mut twice = 0.0;
+    for v in it {
+        let cur = [v[0] - o[0], v[1] - o[1]];
+        twice += prev[0] * cur[1] - prev[1] * cur[0];
+        prev = cur;
+    }
+    0.5 * twice
+}
+
+/// A closed half-space `normal · p ≤ offset` bounding a [`Polyhedron`] (unit normal, outward).
+#[derive(Debug, Clone, Copy)]
+struct Plane {
+    normal: [f64; 3],
+    offset: f64,
+}
+
+/// The convex hull of a spatial cloud, stored as its bounding planes in world coordinates.
+#[derive(Debug, Clone)]
+pub(crate) struct Polyhedron {
+    planes: Vec<Plane>,
+    volume: f64,
+    vertex_count: usize,
+    lo: [f64; 3],
+    hi: [f64; 3],
+}
+
+impl Polyhedron {
+    /// Convex hull of `points`; `None` if they span no volume.
+    pub(crate) fn hull(points: &[[f64; 3]]) -> Option<Polyhedron> {
+        let frame = Frame::fit(points, 3)?;
+        let unit: Vec<Vector3> = points
+            .iter()
+            .map(|p| {
+                let u = frame.to_unit(p);
+                Vector3::new(u[0], u[1], u[2])
+            })
+            .collect();
+        let (verts, tris) = parry3d_f64::transformation::try_convex_hull(&unit).ok()?;
+        if tris.len() < 4 {
+            return None;
+        }
+        // Divergence theorem: the volume is the sum of signed tetrahedra (origin, face). The unit
+        // frame is centred on the cloud, so the terms stay small and well conditioned.
+        let mut six_vol = 0.0;
+        for t in &tris {
+            let [a, b, c] = t.map(|i| verts[i as usize]);
+            six_vol += a.dot(b.cross(c));
+        }
+        let volume = (six_vol / 6.0).abs() * frame.det();
+        if !(volume.is_finite() && volume > 0.0) {
+            return None;
+        }
+        let world: Vec<[f64; 3]> = verts
+            .iter()
+            .map(|v| frame.to_world(&[v.x, v.y, v.z]))
+            .collect();
+        let mut lo = world[0];
+        let mut hi = world[0];
+        let mut centroid = [0.0; 3];
+        for w in &world {
+            for a in 0..3 {
+                lo[a] = lo[a].min(w[a]);
+                hi[a] = hi[a].max(w[a]);
+                centroid[a] += w[a] / world.len() as f64;
+            }
+        }
+        let mut planes = Vec::with_capacity(tris.len());
+        for t in &tris {
+            let [a, b, c] = t.map(|i| world[i as usize]);
+            let n = cross(&sub(&b, &a), &sub(&c, &a));
+            let len = dot(&n, &n).sqrt();
+            if !(len > 0.0 && len.is_finite()) {
+                continue;
+            }
+            let mut normal = n.map(|x| x / len);
+            let mut offset = dot(&normal, &a);
+            // Orient outward: the centroid of the vertices lies inside.
+            if dot(&normal, &centroid) > offset {
+                normal = normal.map(|x| -x);
+                offset = -offset;
+            }
+            planes.push(Plane { normal, offset });
+        }
+        Some(Polyhedron {
+            planes,
+            volume,
+            vertex_count: verts.len(),
+            lo,
+            hi,
+        })
+    }
+
+    /// Volume of the polyhedron (m³).
+    pub(crate) fn volume(&self) -> f64 {
+        self.volume
+    }
+
+    /// Number of hull vertices.
+    pub(crate) fn vertex_count(&self) -> usize {
+        self.vertex_count
+    }
+
+    /// Lower corner of the bounding box.
+    pub(crate) fn lo(&self) -> [f64; 3] {
+        self.lo
+    }
+
+    /// Upper corner of the bounding box.
+    pub(crate) fn hi(&self) -> [f64; 3] {
+        self.hi
+    }
+
+    /// The z-interval `(bottom, top)` where the vertical line through `(x, y)` crosses the
+    /// polyhedron (clipping the line against every face plane), or `None` if it misses.
+    pub(crate) fn chord_at(&self, x: f64, y: f64) -> Option<(f64, f64)> {
+        let mut bottom = f64::NEG_INFINITY;
+        let mut top = f64::INFINITY;
+        for p in &self.planes {
+            let room = p.offset - p.normal[0] * x - p.normal[1] * y;
+            let nz = p.normal[2];
+            if nz > 0.0 {
+                top = top.min(room / nz);
+            } else if nz < 0.0 {
+                bottom = bottom.max(room / nz);
+            } else if room < 0.0 {
+                return None;
+            }
+        }
+        (bottom < top).then_some((bottom, top))
+    }
+}
+
+fn sub(a: &[f64; 3], b: &[f64; 3]) -> [f64; 3] {
+    [a[0] - b[0], a[1] - b[1], a[2] - b[2]]
+}
+
+fn cross(a: &[f64; 3], b: &[f64; 3]) -> [f64; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+fn dot(a: &[f64; 3], b: &[f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+    use std::f64::consts::PI;
+
+    fn rel(a: f64, b: f64) -> f64 {
+        (a - b).abs() / b.abs()
+    }
+
+    /// Rotation matrix from a unit quaternion (w, x, y, z) normalised here.
+    fn rotation(q: [f64; 4]) -> [[f64; 3]; 3] {
+        let n = q.iter().map(|c| c * c).sum::<f64>().sqrt();
+        let [w, x, y, z] = q.map(|c| c / n);
+        [
+            [
+                1.0 - 2.0 * (y * y + z * z),
+                2.0 * (x * y - w * z),
+                2.0 * (x * z + w * y),
+            ],
+            [
+                2.0 * (x * y + w * z),
+                1.0 - 2.0 * (x * x + z * z),
+                2.0 * (y * z - w * x),
+            ],
+            [
+                2.0 * (x * z - w * y),
+                2.0 * (y * z + w * x),
+                1.0 - 2.0 * (x * x + y * y),
+            ],
+        ]
+    }
+
+    fn apply(m: &[[f64; 3]; 3], p: &[f64; 3], offset: [f64; 3]) -> [f64; 3] {
+        std::array::from_fn(|r| dot(&m[r], p) + offset[r])
+    }
+
+    /// Corners of the box `[0, sx] × [0, sy] × [0, sz]` plus random interior points.
+    fn box_cloud(s: [f64; 3], interior: usize, seed: u64) -> Vec<[f64; 3]> {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let mut pts: Vec<[f64; 3]> = (0..8)
+            .map(|c| std::array::from_fn(|a| if c >> a & 1 == 1 { s[a] } else { 0.0 }))
+            .collect();
+        pts.extend((0..interior).map(|_| std::array::from_fn(|a| rng.random::<f64>() * s[a])));
+        pts
+    }
+
+    #[test]
+    fn unit_square_with_interior_points() {
+        let mut pts = vec![
+            [0.0, 0.0, 5.0],
+            [1.0, 0.0, -1.0],
+            [1.0, 1.0, 0.0],
+            [0.0, 1.0, 2.0],
+        ];
+        pts.extend([
+            [0.5, 0.5, 0.0],
+            [0.2, 0.7, 0.0],
+            [0.9, 0.1, 0.0],
+            [0.5, 0.0, 0.0],
+        ]);
+        let p = Polygon::hull(&pts).expect("square");
+        assert!((p.area() - 1.0).abs() < 1e-12);
+        assert_eq!(
+            p.vertex_count(),
+            4,
+            "interior and edge points are not vertices"
+        );
+    }
+
+    #[test]
+    fn regular_polygons_far_from_origin() {
+        for n in [3, 5, 12, 100] {
+            let pts: Vec<[f64; 3]> = (0..n)
+                .map(|i| {
+                    let t = 2.0 * PI * i as f64 / n as f64 + 0.3;
+                    [1e5 + 2.0 * t.cos(), -3e4 + 2.0 * t.sin(), 0.0]
+                })
+                .collect();
+            let exact = 0.5 * n as f64 * 4.0 * (2.0 * PI / n as f64).sin();
+            let p = Polygon::hull(&pts).expect("polygon");
+            assert!(
+                rel(p.area(), exact) < 1e-9,
+                "{n}-gon: {} vs {exact}",
+                p.area()
+            );
+            assert_eq!(p.vertex_count(), n);
+        }
+    }
+
+    #[test]
+    fn cube_and_tetrahedron() {
+        let cube = Polyhedron::hull(&box_cloud([1.0; 3], 50, 1)).expect("cube");
+        assert!((cube.volume() - 1.0).abs() < 1e-12);
+        assert_eq!(cube.vertex_count(), 8);
+        let tet = [
+            [0.0, 0.0, 0.0],
+            [1.0, 0.0, 0.0],
+            [0.0, 1.0, 0.0],
+            [0.0, 0.0, 1.0],
+        ];
+        let t = Polyhedron::hull(&tet).expect("tetrahedron");
+        assert!((t.volume() - 1.0 / 6.0).abs() < 1e-14);
+        assert_eq!(t.vertex_count(), 4);
+        // A rotated, shifted tetrahedron keeps its volume.
+        let m = rotation([0.3, -0.5, 0.7, 0.2]);
+        let moved: Vec<[f64; 3]> = tet
+            .iter()
+            .map(|p| apply(&m, p, [3.0, -7.0, 100.0]))
+            .collect();
+        let t2 = Polyhedron::hull(&moved).expect("tetrahedron");
+        assert!(rel(t2.volume(), 1.0 / 6.0) < 1e-10);
+    }
+
+    #[test]
+    fn flat_slabs_keep_their_small_volume_or_vanish() {
+        let m = rotation([0.9, 0.2, -0.4, 0.1]);
+        for (thickness, expect) in [(1e-3, true), (1e-6, true), (1e-12, false)] {
+            let slab = box_cloud([1.0, 1.0, thickness], 200, 2);
+            let rotated: Vec<[f64; 3]> = slab
+                .iter()
+                .map(|p| apply(&m, p, [0.5, 2.0, -1.0]))
+                .collect();
+            for cloud in [&slab, &rotated] {
+                match Polyhedron::hull(cloud) {
+                    Some(h) if expect => {
+                        assert!(
+                            rel(h.volume(), thickness) < 1e-6,
+                            "{thickness}: {}",
+                            h.volume()
+                        );
+                        assert_eq!(h.vertex_count(), 8);
+                    }
+                    None if !expect => {}
+                    other => panic!("{thickness}: {:?}", other.map(|h| h.volume())),
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn degenerate_clouds_have_no_hull() {
+        let collinear = [
+            [0.0, 0.0, 0.0],
+            [1.0, 2.0, 0.0],
+            [2.0, 4.0, 0.0],
+            [0.5, 1.0, 0.0],
+        ];
+        assert!(Polygon::hull(&collinear).is_none());
+        assert!(Polyhedron::hull(&collinear).is_none());
+        let coplanar = [
+            [0.0, 0.0, 1.0],
+            [1.0, 0.0, 1.0],
+            [0.0, 1.0, 1.0],
+            [1.0, 1.0, 1.0],
+            [0.3, 0.3, 1.0],
+        ];
+        assert!(Polyhedron::hull(&coplanar).is_none());
+        assert!(Polygon::hull(&coplanar).is_some());
+        let dup = [[0.2, 0.3, 0.4]; 10];
+        assert!(Polygon::hull(&dup).is_none());
+        assert!(Polyhedron::hull(&dup).is_none());
+        let two = [[0.0, 0.0, 0.0], [1.0, 1.0, 1.0]];
+        assert!(Polygon::hull(&two).is_none());
+        assert!(Polyhedron::hull(&two[..0]).is_none());
+        // A triangle with its corners repeated many times is still a triangle.
+        let mut tri = vec![[0.0, 0.0, 0.0]; 5];
+        tri.extend([[2.0, 0.0, 0.0]; 5]);
+        tri.extend([[0.0, 1.0, 0.0]; 5]);
+        assert!((Polygon::hull(&tri).expect("triangle").area() - 1.0).abs() < 1e-12);
+        // The same for a tetrahedron in 3D.
+        let mut tet = vec![[0.0, 0.0, 0.0]; 4];
+        tet.extend([[1.0, 0.0, 0.0]; 4]);
+        tet.extend([[0.0, 1.0, 0.0]; 4]);
+        tet.extend([[0.0, 0.0, 3.0]; 4]);
+        assert!((Polyhedron::hull(&tet).expect("tetrahedron").volume() - 0.5).abs() < 1e-12);
+    }
+
+    #[test]
+    fn cross_sections() {
+        let square = Polygon::hull(&[
+            [0.0, 0.0, 0.0],
+            [2.0, 0.0, 0.0],
+            [2.0, 1.0, 0.0],
+            [0.0, 1.0, 0.0],
+        ])
+        .expect("square");
+        let [lo, hi] = square.boundary_at(0.5).expect("inside");
+        assert_eq!((lo.y, hi.y, lo.slope, hi.slope), (0.0, 1.0, 0.0, 0.0));
+        assert!(square.boundary_at(2.0).is_none() && square.boundary_at(-0.1).is_none());
+        let tri = Polygon::hull(&[[0.0, 0.0, 0.0], [2.0, 0.0, 0.0], [0.0, 2.0, 0.0]]).expect("tri");
+        let [lo, hi] = tri.boundary_at(0.5).expect("inside");
+        assert!(
+            (lo.y - 0.0).abs() < 1e-15
+                && (hi.y - 1.5).abs() < 1e-15
+                && (hi.slope + 1.0).abs() < 1e-15
+        );
+        let cube = Polyhedron::hull(&box_cloud([1.0, 2.0, 3.0], 20, 3)).expect("box");
+        let (b, t) = cube.chord_at(0.5, 1.5).expect("inside");
+        assert!(b.abs() < 1e-12 && (t - 3.0).abs() < 1e-12);
+        assert!(cube.chord_at(1.5, 0.5).is_none());
+    }
+
+    #[test]
+    fn efron_factor_values() {
+        assert_eq!(efron_factor(0, 10), 1.0);
+        assert!((efron_factor(11, 99) - 100.0 / 89.0).abs() < 1e-15);
+        assert_eq!(efron_factor(4, 4), 5.0);
+        assert_eq!(efron_factor(9, 4), 5.0, "v is capped at n");
+    }
+}

@@ -376,44 +376,47 @@ impl Settings {
             Some((path, _)) if path == BUILTIN_URDF_PATH => RobotSource::Builtin,
             Some((path, _)) => RobotSource::File(PathBuf::from(path)),
         };
-        let model = named(
-            set,
-            "model",
-            ModelKind::from_name,
-            &["quadrotor", "point_mass"],
-        )?
-        .unwrap_or(ModelKind::Quadrotor);
-        let horizon = positive(set, "horizon")?.unwrap_or(1.0);
-        let trajectories = bounded_count(set, "trajectories", 1, MAX_TRAJECTORIES)?.unwrap_or(150);
-        let steps = bounded_count(set, "steps", 1, MAX_STEPS)?.unwrap_or(100);
+        let models = ["quadrotor", "point_mass"];
+        let model = required("model", named(set, "model", ModelKind::from_name, &models)?)?;
+        let horizon = required("horizon", positive(set, "horizon")?)?;
+        let trajectories = required(
+            "trajectories",
+            bounded_count(set, "trajectories", 1, MAX_TRAJECTORIES)?,
+        )?;
+        let steps = required("steps", bounded_count(set, "steps", 1, MAX_STEPS)?)?;
         let samplers: Vec<_> = SamplerKind::ALL.iter().map(|s| s.name()).collect();
-        let sampler = named(set, "sampler", SamplerKind::from_name, &samplers)?
-            .unwrap_or(SamplerKind::BangBang);
-        let seed = set.take_u64("seed")?.unwrap_or(0);
-        let safety_coefficient = positive(set, "safety_coefficient")?.unwrap_or(1.0);
-        let volume_dims = named(
-            set,
+        let sampler = required(
+            "sampler",
+            named(set, "sampler", SamplerKind::from_name, &samplers)?,
+        )?;
+        let seed = required("seed", set.take_u64("seed")?)?;
+        let safety_coefficient =
+            required("safety_coefficient", positive(set, "safety_coefficient")?)?;
+        let volume_dims = required(
             "volume_dims",
-            |s| match s {
-                "2" => Some(VolumeDims::Two),
-                "3" => Some(VolumeDims::Three),
-                _ => None,
-            },
-            &["2", "3"],
-        )?
-        .unwrap_or(VolumeDims::Two);
+            named(
+                set,
+                "volume_dims",
+                |s| match s {
+                    "2" => Some(VolumeDims::Two),
+                    "3" => Some(VolumeDims::Three),
+                    _ => None,
+                },
+                &["2", "3"],
+            )?,
+        )?;
         let estimators: Vec<_> = EstimatorKind::ALL.iter().map(|e| e.name()).collect();
-        let estimator = named(set, "estimator", EstimatorKind::from_name, &estimators)?
-            .unwrap_or(EstimatorKind::Hull);
+        let estimator = required(
+            "estimator",
+            named(set, "estimator", EstimatorKind::from_name, &estimators)?,
+        )?;
         let robot_radius = positive(set, "robot_radius")?;
         let max_acceleration = positive(set, "max_acceleration")?;
-        let unknown_space = named(
-            set,
+        let policies = ["occupied", "free"];
+        let unknown_space = required(
             "unknown_space",
-            UnknownSpace::from_name,
-            &["occupied", "free"],
-        )?
-        .unwrap_or(UnknownSpace::Occupied);
+            named(set, "unknown_space", UnknownSpace::from_name, &policies)?,
+        )?;
         let ceiling_source = set.values.get("ceiling_height").map(|(_, s)| s.clone());
         let floor_height = finite(set, "floor_height")?;
         let ceiling_height = finite(set, "ceiling_height")?;
@@ -445,6 +448,17 @@ impl Settings {
             ceiling_height,
         })
     }
+}
+
+/// A parameter every evaluation needs: the built-in config always sets it, so it is missing
+/// only when a file or override cleared it (`name: ~`).
+fn required<T>(name: &str, value: Option<T>) -> Result<T, ConfigError> {
+    value.ok_or_else(|| {
+        ConfigError::new(
+            "parameters",
+            format!("'{name}' must be set (the built-in config sets it; a file or -p cleared it)"),
+        )
+    })
 }
 
 fn named<T>(

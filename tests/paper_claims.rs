@@ -51,7 +51,6 @@ fn speed_toward_a_wall_scores_below_speed_away_from_it() {
             still.empowerment,
             away.empowerment
         );
-        assert!(toward.num_colliding > away.num_colliding, "{model}");
     }
 }
 

@@ -27,6 +27,17 @@ fn main() {
         let occupancy_us = time(&mut || {
             std::hint::black_box(Occupancy::build(&scan, &state.attitude, 1.0, opts));
         });
+        let occupancy = Occupancy::build(&scan, &state.attitude, 1.0, opts);
+        let xs: Vec<f32> = (0..150).map(|i| (i as f32 * 0.37).sin() * 2.0).collect();
+        let ys: Vec<f32> = (0..150).map(|i| (i as f32 * 0.53).cos() * 2.0).collect();
+        let zs = vec![0.0f32; 150];
+        let mut hit = vec![0u8; 150];
+        let checks_us = time(&mut || {
+            for _ in 0..100 {
+                occupancy.mark_collisions(&xs, &ys, &zs, std::hint::black_box(&mut hit));
+            }
+        });
+        println!("collision checks, 150 points × 100 steps: {checks_us:.1} µs");
         let volumes_us = time(&mut || {
             std::hint::black_box(cstep::volume::estimate(
                 &estimate.rollout.endpoints,

@@ -92,7 +92,9 @@ fn roll_out_block(
                 .copy_from_slice(&all[from + lanes.start..from + lanes.end]);
         }
         model.actuate(&state, &commands, axes, &mut actuation);
-        integrator.step(model, &mut state, &actuation, dt);
+        if !model.integrate_exactly(&mut state, &actuation, dt) {
+            integrator.step(model, &mut state, &actuation, dt);
+        }
         if hit.iter().any(|&h| h == 0) {
             let [x, y, z] = POSITION_COMPONENTS.map(|c| state.component(c));
             occupancy.mark_collisions(x, y, z, &mut hit);

@@ -95,7 +95,7 @@ fn roll_out_block(
         if !model.integrate_exactly(&mut state, &actuation, dt) {
             integrator.step(model, &mut state, &actuation, dt);
         }
-        if hit.iter().any(|&h| h == 0) {
+        if hit.contains(&0) {
             let [x, y, z] = POSITION_COMPONENTS.map(|c| state.component(c));
             occupancy.mark_collisions(x, y, z, &mut hit);
         }

@@ -582,6 +582,35 @@ mod tests {
     }
 
     #[test]
+    fn no_disk_centre_comes_within_a_radius_of_a_pillar_or_a_corner() {
+        let radius = 0.1;
+        let scenes = [
+            crate::scene::Scene::open().boxed(0.8, -0.3, 1.2, 0.1),
+            crate::scene::Scene::open().boxed(-1.0, -1.5, 1.5, 1.0),
+        ];
+        for scene in scenes {
+            let lidar = crate::scene::Lidar {
+                beams: 180,
+                range_min: 0.02,
+                range_max: 10.0,
+            };
+            let scan = scene.scan(nalgebra::Vector2::zeros(), &level(), &lidar);
+            let mut opts = options(radius);
+            opts.unknown_space = UnknownSpace::Free;
+            let occupancy = Occupancy::build(&scan, &level(), 1.0, &opts);
+            for i in 0..300 {
+                for j in 0..300 {
+                    let (x, y) = (-1.5 + i as f64 * 0.01, -1.5 + j as f64 * 0.01);
+                    let clearance = scene.clearance(nalgebra::Vector2::new(x, y));
+                    if clearance < 0.97 * radius {
+                        assert!(!occupancy.is_free(x as f32, y as f32, 0.0), "({x}, {y})");
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
     fn rep117_values_are_read_as_specified() {
         let mut scan = ring(1.0, 4);
         scan.ranges = vec![f32::NEG_INFINITY, f32::INFINITY, f32::NAN, 0.01];

@@ -184,23 +184,30 @@ impl NeighbourGrid {
         out.clear();
         for z in lo[2]..=hi[2] {
             for y in lo[1]..=hi[1] {
-                for s in self.row(lo[0], hi[0], y, z) {
-                    let p = &self.sorted[s];
-                    let across = (p[u] - at[u]) * (p[u] - at[u]) + (p[v] - at[v]) * (p[v] - at[v]);
-                    if across < reach2 {
-                        out.push((p[axis], across, self.ids[s]));
-                    }
+                let row = self.row(lo[0], hi[0], y, z);
+                // Branch-free filter: write every point, advance only past those within reach
+                // (a data-dependent branch here mispredicts about a third of the time).
+                let mut len = out.len();
+                out.resize(len + row.len(), (0.0, 0.0, 0));
+                for (p, &id) in self.sorted[row.clone()].iter().zip(&self.ids[row]) {
+                    let (du, dv) = (p[u] - at[u], p[v] - at[v]);
+                    let across = du * du + dv * dv;
+                    out[len] = (p[axis], across, id);
+                    len += usize::from(across < reach2);
                 }
+                out.truncate(len);
             }
         }
         // Rows come in ascending cell order along the line (`axis` is the slowest-varying grid
         // axis in play), so the list is nearly sorted and insertion sort is linear in practice.
         for i in 1..out.len() {
+            let item = out[i];
             let mut j = i;
-            while j > 0 && out[j - 1].0 > out[j].0 {
-                out.swap(j - 1, j);
+            while j > 0 && out[j - 1].0 > item.0 {
+                out[j] = out[j - 1];
                 j -= 1;
             }
+            out[j] = item;
         }
         complete
     }

@@ -182,21 +182,26 @@ fn octagon_survivors(unit: &[Vector2]) -> Vec<usize> {
             corners.push(i);
         }
     }
-    let edges: Vec<(Vector2, Vector2)> = (0..corners.len())
-        .map(|k| {
-            let a = unit[corners[k]];
-            (a, unit[corners[(k + 1) % corners.len()]] - a)
-        })
-        .collect();
+    if corners.len() < 3 {
+        return (0..unit.len()).collect();
+    }
+    // Edge k as the line a·p ≥ b (inside: a·p > b), from corner k to corner k + 1.
+    let mut lines = [([0.0; 2], f64::NEG_INFINITY); 8];
+    for (k, line) in lines.iter_mut().enumerate().take(corners.len()) {
+        let a = unit[corners[k]];
+        let e = unit[corners[(k + 1) % corners.len()]] - a;
+        *line = ([-e.y, e.x], -e.y * a.x + e.x * a.y);
+    }
+    // Branch-free test against all eight lines (unused ones always pass); strictly inside by a
+    // margin far above rounding in the unit frame.
     (0..unit.len())
         .filter(|&i| {
             let p = unit[i];
-            // Strictly inside by a margin far above rounding in the unit frame.
-            let inside = corners.len() >= 3
-                && edges
-                    .iter()
-                    .all(|(a, e)| e.x * (p.y - a.y) - e.y * (p.x - a.x) > 1e-12);
-            !inside
+            let depth = lines
+                .iter()
+                .map(|(a, b)| a[0] * p.x + a[1] * p.y - b)
+                .fold(f64::INFINITY, f64::min);
+            depth <= 1e-12
         })
         .collect()
 }

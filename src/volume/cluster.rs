@@ -64,7 +64,7 @@ pub(crate) fn cluster_terminal(
         if !terminal[i] {
             continue;
         }
-        for j in grid.k_nearest(p, i, k).indices() {
+        for j in grid.k_nearest(p, i, k) {
             if terminal[j] {
                 union(&mut parent, i, j);
             }

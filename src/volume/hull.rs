@@ -53,8 +53,14 @@ impl Polygon {
                 Vector2::new(u[0], u[1])
             })
             .collect();
-        // `fit` guarantees at least two distinct points, parry's only precondition.
-        let idx = parry2d_f64::transformation::convex_hull_idx(&unit);
+        let keep = octagon_survivors(&unit);
+        let sub: Vec<Vector2> = keep.iter().map(|&i| unit[i]).collect();
+        // `fit` guarantees at least two distinct points (the x-extremes of the unit frame are
+        // 1 apart and both survive), parry's only precondition.
+        let idx: Vec<usize> = parry2d_f64::transformation::convex_hull_idx(&sub)
+            .into_iter()
+            .map(|i| keep[i])
+            .collect();
         if idx.len() < 3 {
             return None;
         }
@@ -143,6 +149,61 @@ impl Polygon {
         }
         Some([lower?, upper?])
     }
+}
+
+/// Akl–Toussaint prefilter: indices of the points that can be hull vertices — all except those
+/// strictly inside the octagon spanned by the extreme points in eight directions (a point
+/// strictly inside a convex polygon whose corners are among the points is no hull vertex).
+/// Exact and cheap; for a uniform sample it leaves about a fifth of the points to quickhull.
+fn octagon_survivors(unit: &[Vector2]) -> Vec<usize> {
+    const DIRECTIONS: [[f64; 2]; 8] = [
+        [1.0, 0.0],
+        [1.0, 1.0],
+        [0.0, 1.0],
+        [-1.0, 1.0],
+        [-1.0, 0.0],
+        [-1.0, -1.0],
+        [0.0, -1.0],
+        [1.0, -1.0],
+    ];
+    let mut extreme = [(f64::NEG_INFINITY, 0usize); 8];
+    for (i, p) in unit.iter().enumerate() {
+        for (d, e) in DIRECTIONS.iter().zip(&mut extreme) {
+            let s = d[0] * p.x + d[1] * p.y;
+            if s > e.0 {
+                *e = (s, i);
+            }
+        }
+    }
+    // Support points of directions in angular order run counter-clockwise around the hull.
+    let mut corners: Vec<usize> = Vec::with_capacity(8);
+    for &(_, i) in &extreme {
+        if corners.last() != Some(&i) && corners.first() != Some(&i) {
+            corners.push(i);
+        }
+    }
+    if corners.len() < 3 {
+        return (0..unit.len()).collect();
+    }
+    // Edge k as the line a·p ≥ b (inside: a·p > b), from corner k to corner k + 1.
+    let mut lines = [([0.0; 2], f64::NEG_INFINITY); 8];
+    for (k, line) in lines.iter_mut().enumerate().take(corners.len()) {
+        let a = unit[corners[k]];
+        let e = unit[corners[(k + 1) % corners.len()]] - a;
+        *line = ([-e.y, e.x], -e.y * a.x + e.x * a.y);
+    }
+    // Branch-free test against all eight lines (unused ones always pass); strictly inside by a
+    // margin far above rounding in the unit frame.
+    (0..unit.len())
+        .filter(|&i| {
+            let p = unit[i];
+            let depth = lines
+                .iter()
+                .map(|(a, b)| a[0] * p.x + a[1] * p.y - b)
+                .fold(f64::INFINITY, f64::min);
+            depth <= 1e-12
+        })
+        .collect()
 }
 
 /// Twice-halved shoelace sum: signed area of the closed polygon through `vertices`, taken
@@ -501,6 +562,32 @@ mod tests {
         let (b, t) = cube.chord_at(0.5, 1.5).expect("inside");
         assert!(b.abs() < 1e-12 && (t - 3.0).abs() < 1e-12);
         assert!(cube.chord_at(1.5, 0.5).is_none());
+    }
+
+    #[test]
+    fn octagon_prefilter_keeps_every_hull_vertex() {
+        let mut rng = ChaCha8Rng::seed_from_u64(4);
+        for n in [3, 4, 10, 150, 2000] {
+            let unit: Vec<Vector2> = (0..n)
+                .map(|_| Vector2::new(rng.random::<f64>() - 0.5, rng.random::<f64>() - 0.5))
+                .collect();
+            let mut all = parry2d_f64::transformation::convex_hull_idx(&unit);
+            let keep = octagon_survivors(&unit);
+            assert!(all.iter().all(|i| keep.contains(i)), "n {n}");
+            let mut filtered: Vec<usize> = {
+                let sub: Vec<Vector2> = keep.iter().map(|&i| unit[i]).collect();
+                parry2d_f64::transformation::convex_hull_idx(&sub)
+                    .into_iter()
+                    .map(|i| keep[i])
+                    .collect()
+            };
+            all.sort_unstable();
+            filtered.sort_unstable();
+            assert_eq!(all, filtered, "n {n}");
+            if n >= 150 {
+                assert!(keep.len() < n / 3, "n {n}: {} survivors", keep.len());
+            }
+        }
     }
 
     #[test]

@@ -1,73 +1,77 @@
-//! Nearest-neighbour queries over the endpoints with a uniform bucket grid.
+//! Neighbour queries over the endpoints with a uniform bucket grid.
 //!
-//! Clustering asks for the k nearest endpoints of every terminal endpoint and the free-fraction
-//! estimator for the nearest endpoint of ~1000–4000 probes; brute force would cost O(n) per query
-//! (2000 endpoints: milliseconds). The grid holds about two endpoints per cell, so a query visits
-//! a few rings of cells around its own and stops as soon as no unvisited cell can hold a closer
-//! point — exact results in O(1) expected time per query for spread-out clouds.
+//! Clustering asks for the k nearest endpoints of every terminal endpoint, and the free-fraction
+//! estimator for the endpoints near each of its integration lines; brute force would cost O(n)
+//! per query (2000 endpoints: milliseconds per estimate). The grid holds about two endpoints per
+//! cell and stores their coordinates in cell order, so that one grid row is one contiguous run
+//! of memory. A k-nearest query visits rings of cells around its own and stops as soon as no
+//! unvisited cell can hold a closer point: exact, O(1) expected time for spread-out clouds.
 
 /// The most neighbours one query can return.
 pub(crate) const MAX_K: usize = 8;
 
-/// Endpoints bucketed by cell (counting sort, CSR layout).
+/// Endpoints bucketed by cell (counting sort): coordinates are copied in cell order so that
+/// the cells of one grid row form one contiguous run of memory.
 #[derive(Debug)]
-pub(crate) struct NeighbourGrid<'a> {
-    points: &'a [[f64; 3]],
+pub(crate) struct NeighbourGrid {
+    /// Points in cell order (x fastest, then y, then z).
+    sorted: Vec<[f64; 3]>,
+    /// Caller's index of `sorted[s]`.
+    ids: Vec<u32>,
+    /// `start[c]..start[c + 1]` are the slots of cell `c`.
+    start: Vec<u32>,
     lo: [f64; 3],
     cell: f64,
     inv_cell: f64,
     cells: [usize; 3],
-    /// `start[c]..start[c + 1]` indexes `members` for cell `c` (x fastest, then y, then z).
-    start: Vec<u32>,
-    members: Vec<u32>,
 }
 
-/// The result of a k-nearest query: up to [`MAX_K`] `(squared distance, point index)` pairs,
-/// closest first.
+/// The result of a k-nearest query: up to [`MAX_K`] `(squared distance, caller's index)`
+/// pairs, closest first.
 #[derive(Debug, Clone, Copy)]
-pub(crate) struct Nearest {
+struct Nearest {
     found: [(f64, u32); MAX_K],
     len: usize,
     k: usize,
+    /// Squared distance a candidate must beat to enter (∞ until `k` are found).
+    bound: f64,
 }
 
 impl Nearest {
-    /// Indices of the neighbours found, closest first.
-    pub(crate) fn indices(&self) -> impl Iterator<Item = usize> + '_ {
-        self.found[..self.len].iter().map(|&(_, i)| i as usize)
+    fn new(k: usize) -> Self {
+        Nearest {
+            found: [(f64::INFINITY, 0); MAX_K],
+            len: 0,
+            k: k.clamp(1, MAX_K),
+            bound: f64::INFINITY,
+        }
     }
 
-    /// Keeps the `k` closest candidates seen so far (insertion into a short sorted array).
-    fn offer(&mut self, d2: f64, i: u32) {
+    /// Inserts a candidate closer than `bound` (insertion into a short sorted array).
+    #[inline]
+    fn offer(&mut self, d2: f64, id: u32) {
         let mut at = if self.len < self.k {
             self.len += 1;
             self.len - 1
-        } else if d2 < self.found[self.k - 1].0 {
-            self.k - 1
         } else {
-            return;
+            self.k - 1
         };
         while at > 0 && self.found[at - 1].0 > d2 {
             self.found[at] = self.found[at - 1];
             at -= 1;
         }
-        self.found[at] = (d2, i);
-    }
-
-    fn is_full(&self) -> bool {
-        self.len == self.k
-    }
-
-    fn worst(&self) -> f64 {
-        self.found[self.k - 1].0
+        self.found[at] = (d2, id);
+        if self.len == self.k {
+            self.bound = self.found[self.k - 1].0;
+        }
     }
 }
 
-impl<'a> NeighbourGrid<'a> {
+impl NeighbourGrid {
     /// Buckets `points`, of which the first `dims` coordinates count (the rest must be equal
     /// for all points, e.g. 0 in 2D). Cells are cubes sized for about two points each; the cell
     /// count stays O(n) however elongated the cloud is.
-    pub(crate) fn new(points: &'a [[f64; 3]], dims: usize) -> Self {
+    pub(crate) fn new(points: &[[f64; 3]], dims: usize) -> Self {
         let mut lo = points.first().copied().unwrap_or([0.0; 3]);
         let mut hi = lo;
         for p in points {
@@ -97,62 +101,142 @@ impl<'a> NeighbourGrid<'a> {
             cell *= 1.25;
         }
         let mut grid = NeighbourGrid {
-            points,
+            sorted: vec![[0.0; 3]; points.len()],
+            ids: vec![0; points.len()],
+            start: vec![0; cells.iter().product::<usize>() + 1],
             lo,
             cell,
             inv_cell: 1.0 / cell,
             cells,
-            start: vec![0; cells.iter().product::<usize>() + 1],
-            members: vec![0; points.len()],
         };
-        for p in points {
-            let c = grid.cell_index(grid.cell_of(p));
-            grid.start[c + 1] += 1;
+        let cell_ids: Vec<u32> = points
+            .iter()
+            .map(|p| grid.cell_index(grid.cell_of(p)) as u32)
+            .collect();
+        for &c in &cell_ids {
+            grid.start[c as usize + 1] += 1;
         }
         for c in 1..grid.start.len() {
             grid.start[c] += grid.start[c - 1];
         }
         let mut fill = grid.start.clone();
-        for (i, p) in points.iter().enumerate() {
-            let c = grid.cell_index(grid.cell_of(p));
-            grid.members[fill[c] as usize] = i as u32;
-            fill[c] += 1;
+        for (i, (p, &c)) in points.iter().zip(&cell_ids).enumerate() {
+            let s = fill[c as usize] as usize;
+            grid.sorted[s] = *p;
+            grid.ids[s] = i as u32;
+            fill[c as usize] += 1;
         }
         grid
     }
 
-    /// The `k` (≤ [`MAX_K`]) points nearest to `q`, leaving out the point with index `skip`
-    /// (pass `usize::MAX` to keep all). Ties are broken arbitrarily.
-    pub(crate) fn k_nearest(&self, q: &[f64; 3], skip: usize, k: usize) -> Nearest {
-        let mut best = Nearest {
-            found: [(f64::INFINITY, 0); MAX_K],
-            len: 0,
-            k: k.clamp(1, MAX_K),
+    /// Caller's indices of the `k` (≤ [`MAX_K`]) points nearest to `q`, closest first, leaving
+    /// out the point with index `skip` (`usize::MAX` keeps all). Ties are broken arbitrarily.
+    pub(crate) fn k_nearest(
+        &self,
+        q: &[f64; 3],
+        skip: usize,
+        k: usize,
+    ) -> impl Iterator<Item = usize> + '_ {
+        let best = self.ring_search(q, skip, k);
+        (0..best.len).map(move |i| best.found[i].1 as usize)
+    }
+
+    /// Side of the grid's cubic cells (about two points per cell).
+    pub(crate) fn cell(&self) -> f64 {
+        self.cell
+    }
+
+    /// Fills `out` with `(coordinate along axis, squared distance across the line, caller's
+    /// index)` for every point closer than `reach` to the axis-parallel line through `at` along
+    /// `axis` whose coordinate along the line lies within `reach` of `[from, to]`, sorted along
+    /// the line. Returns `true` when the band covered the whole grid, in which case `out` holds
+    /// every point, however far.
+    pub(crate) fn near_line(
+        &self,
+        at: &[f64; 3],
+        axis: usize,
+        [from, to]: [f64; 2],
+        reach: f64,
+        out: &mut Vec<(f64, f64, u32)>,
+    ) -> bool {
+        let mut lo = self.cell_of(&at.map(|c| c - reach));
+        let mut hi = self.cell_of(&at.map(|c| c + reach));
+        let complete = (0..3).all(|a| a == axis || (lo[a] == 0 && hi[a] == self.cells[a] - 1));
+        let (mut first, mut last) = (*at, *at);
+        (first[axis], last[axis]) = (from - reach, to + reach);
+        lo[axis] = if complete {
+            0
+        } else {
+            self.cell_of(&first)[axis]
         };
-        if self.points.is_empty() {
+        hi[axis] = if complete {
+            self.cells[axis] - 1
+        } else {
+            self.cell_of(&last)[axis]
+        };
+        let reach2 = if complete {
+            f64::INFINITY
+        } else {
+            reach * reach
+        };
+        // The two axes across the line.
+        let (u, v) = ((axis + 1) % 3, (axis + 2) % 3);
+        out.clear();
+        for z in lo[2]..=hi[2] {
+            for y in lo[1]..=hi[1] {
+                let row = self.row(lo[0], hi[0], y, z);
+                // Branch-free filter: write every point, advance only past those within reach
+                // (a data-dependent branch here mispredicts about a third of the time).
+                let mut len = out.len();
+                out.resize(len + row.len(), (0.0, 0.0, 0));
+                for (p, &id) in self.sorted[row.clone()].iter().zip(&self.ids[row]) {
+                    let (du, dv) = (p[u] - at[u], p[v] - at[v]);
+                    let across = du * du + dv * dv;
+                    out[len] = (p[axis], across, id);
+                    len += usize::from(across < reach2);
+                }
+                out.truncate(len);
+            }
+        }
+        // Rows come in ascending cell order along the line (`axis` is the slowest-varying grid
+        // axis in play), so the list is nearly sorted and insertion sort is linear in practice.
+        for i in 1..out.len() {
+            let item = out[i];
+            let mut j = i;
+            while j > 0 && out[j - 1].0 > item.0 {
+                out[j] = out[j - 1];
+                j -= 1;
+            }
+            out[j] = item;
+        }
+        complete
+    }
+
+    /// Exact k-nearest search: rings of cells around `q`'s cell until no unvisited cell can
+    /// hold a closer point.
+    fn ring_search(&self, q: &[f64; 3], skip: usize, k: usize) -> Nearest {
+        let mut best = Nearest::new(k);
+        if self.sorted.is_empty() {
             return best;
         }
         let c = self.cell_of(q);
         for r in 0.. {
-            self.visit_ring(c, r, |i| {
-                if i as usize != skip {
-                    let p = &self.points[i as usize];
-                    let d = [p[0] - q[0], p[1] - q[1], p[2] - q[2]];
-                    best.offer(d[0] * d[0] + d[1] * d[1] + d[2] * d[2], i);
+            self.visit_ring(c, r, |slots| {
+                let ids = &self.ids[slots.clone()];
+                for (p, &id) in self.sorted[slots].iter().zip(ids) {
+                    let d2 = dist2(p, q);
+                    if d2 < best.bound && id as usize != skip {
+                        best.offer(d2, id);
+                    }
                 }
             });
             match self.clearance(q, c, r) {
                 None => break,
-                Some(g) if best.is_full() && best.worst() <= g * g => break,
+                Some(g) if best.bound <= g * g => break,
                 Some(_) => {}
             }
         }
         best
-    }
-
-    /// Index of the point nearest to `q` (`None` only for an empty grid).
-    pub(crate) fn nearest(&self, q: &[f64; 3]) -> Option<usize> {
-        self.k_nearest(q, usize::MAX, 1).indices().next()
     }
 
     fn cell_of(&self, p: &[f64; 3]) -> [usize; 3] {
@@ -166,35 +250,29 @@ impl<'a> NeighbourGrid<'a> {
         c[0] + self.cells[0] * (c[1] + self.cells[1] * c[2])
     }
 
-    /// Calls `f` with every point in the cells at Chebyshev distance exactly `r` from cell `c`.
-    fn visit_ring(&self, c: [usize; 3], r: usize, mut f: impl FnMut(u32)) {
-        let r = r as isize;
-        let c = c.map(|x| x as isize);
-        let span = |a: usize| {
-            (
-                (c[a] - r).max(0),
-                (c[a] + r).min(self.cells[a] as isize - 1),
-            )
-        };
+    /// Slots of the cells `x0..=x1` of row `(y, z)`: one contiguous range.
+    fn row(&self, x0: usize, x1: usize, y: usize, z: usize) -> std::ops::Range<usize> {
+        self.start[self.cell_index([x0, y, z])] as usize
+            ..self.start[self.cell_index([x1, y, z]) + 1] as usize
+    }
+
+    /// Calls `f` with the slot ranges of the cells at Chebyshev distance exactly `r` from `c`.
+    fn visit_ring(&self, c: [usize; 3], r: usize, mut f: impl FnMut(std::ops::Range<usize>)) {
+        let span = |a: usize| (c[a].saturating_sub(r), (c[a] + r).min(self.cells[a] - 1));
         let (x0, x1) = span(0);
         let (y0, y1) = span(1);
         let (z0, z1) = span(2);
-        let mut visit = |x: isize, y: isize, z: isize| {
-            let id = self.cell_index([x as usize, y as usize, z as usize]);
-            let (s, e) = (self.start[id] as usize, self.start[id + 1] as usize);
-            self.members[s..e].iter().for_each(|&i| f(i));
-        };
         for z in z0..=z1 {
-            let z_face = (z - c[2]).abs() == r;
+            let z_face = z.abs_diff(c[2]) == r;
             for y in y0..=y1 {
-                if z_face || (y - c[1]).abs() == r {
-                    (x0..=x1).for_each(|x| visit(x, y, z));
+                if z_face || y.abs_diff(c[1]) == r {
+                    f(self.row(x0, x1, y, z));
                 } else {
-                    if c[0] - r >= 0 {
-                        visit(c[0] - r, y, z);
+                    if c[0] >= r {
+                        f(self.row(c[0] - r, c[0] - r, y, z));
                     }
-                    if c[0] + r < self.cells[0] as isize {
-                        visit(c[0] + r, y, z);
+                    if c[0] + r < self.cells[0] {
+                        f(self.row(c[0] + r, c[0] + r, y, z));
                     }
                 }
             }
@@ -218,6 +296,11 @@ impl<'a> NeighbourGrid<'a> {
         }
         bounded.then_some(g.max(0.0))
     }
+}
+
+fn dist2(p: &[f64; 3], q: &[f64; 3]) -> f64 {
+    let d = [p[0] - q[0], p[1] - q[1], p[2] - q[2]];
+    d[0] * d[0] + d[1] * d[1] + d[2] * d[2]
 }
 
 #[cfg(test)]
@@ -258,10 +341,10 @@ mod tests {
                 let grid = NeighbourGrid::new(&pts, dims);
                 for (i, p) in pts.iter().enumerate() {
                     let k = 2 * dims + 2;
-                    let got = grid.k_nearest(p, i, k);
                     let want = brute(&pts, p, i, k);
-                    let got_d: Vec<f64> = got.found[..got.len].iter().map(|x| x.0).collect();
-                    assert_eq!(got_d, want, "dims {dims} n {n} point {i}");
+                    let got: Vec<f64> =
+                        grid.k_nearest(p, i, k).map(|j| dist2(&pts[j], p)).collect();
+                    assert_eq!(got, want, "dims {dims} n {n} point {i}");
                 }
                 for _ in 0..50 {
                     let q = [rng.random::<f64>() * 9.0 - 0.5, rng.random::<f64>(), 0.0];
@@ -270,10 +353,24 @@ mod tests {
                     } else {
                         q
                     };
-                    let i = grid.nearest(&q).expect("non-empty");
-                    let d: f64 = (0..3).map(|a| (pts[i][a] - q[a]).powi(2)).sum();
-                    assert_eq!(d, brute(&pts, &q, usize::MAX, 1)[0]);
+                    let want = brute(&pts, &q, usize::MAX, 1)[0];
+                    let i = grid.k_nearest(&q, usize::MAX, 1).next().expect("non-empty");
+                    assert_eq!(dist2(&pts[i], &q), want);
                 }
+                // Points near a line: exactly those within reach, sorted along it.
+                let q = pts[n / 2];
+                let mut near = Vec::new();
+                let reach = 0.2;
+                let complete = grid.near_line(&q, dims - 1, [-9.0, 9.0], reach, &mut near);
+                let across =
+                    |p: &[f64; 3]| -> f64 { (0..dims - 1).map(|a| (p[a] - q[a]).powi(2)).sum() };
+                let want: Vec<usize> = (0..n)
+                    .filter(|&i| complete || across(&pts[i]) < reach * reach)
+                    .collect();
+                assert!(near.windows(2).all(|w| w[0].0 <= w[1].0));
+                let mut got: Vec<usize> = near.iter().map(|c| c.2 as usize).collect();
+                got.sort_unstable();
+                assert_eq!(got, want);
             }
         }
     }
@@ -281,9 +378,21 @@ mod tests {
     #[test]
     fn empty_and_coincident_points() {
         let none: [[f64; 3]; 0] = [];
-        assert!(NeighbourGrid::new(&none, 2).nearest(&[0.0; 3]).is_none());
+        assert!(NeighbourGrid::new(&none, 2)
+            .k_nearest(&[0.0; 3], usize::MAX, 1)
+            .next()
+            .is_none());
+        let mut near = vec![(0.0, 0.0, 0)];
+        assert!(NeighbourGrid::new(&none, 2).near_line(&[0.0; 3], 1, [0.0, 1.0], 1.0, &mut near));
+        assert!(near.is_empty());
+        assert_eq!(
+            NeighbourGrid::new(&none, 2)
+                .k_nearest(&[0.0; 3], 0, 3)
+                .count(),
+            0
+        );
         let same = [[1.0, 1.0, 0.0]; 6];
         let grid = NeighbourGrid::new(&same, 2);
-        assert_eq!(grid.k_nearest(&same[0], 0, 8).indices().count(), 5);
+        assert_eq!(grid.k_nearest(&same[0], 0, 8).count(), 5);
     }
 }

@@ -103,9 +103,11 @@ fn half_space_obstacle_in_a_cube() {
     report("3D cube, x > 0.5 terminal, n=2000", &err);
     // Hull: reachable hull −5 %, terminal hull of the sparser slab worse, partly cancelling.
     // Efron: the terminal share still comes from raw hulls, whose bias is larger for the
-    // smaller terminal slab, so free comes out a little high. Free fraction is unbiased.
+    // smaller terminal slab, so free comes out a little high. Free fraction's share is
+    // unbiased but it scales the raw hull, which uniform samples leave ~4 % short in 3D (the
+    // bang-bang sampler cnstep uses by default reaches the corners and leaves no such gap).
     assert!(err[0].abs() < 0.04 && err[1].abs() < 0.04, "{err:?}");
-    assert!(err[2].abs() < 0.01, "{err:?}");
+    assert!((-0.05..0.0).contains(&err[2]), "{err:?}");
 }
 
 #[test]
@@ -130,7 +132,8 @@ fn l_shaped_obstacle_in_3d() {
     let in_l = |p: &[f64; 3]| (p[0] > 1.0 && p[1] < 1.0) || p[0] > 1.5;
     let err = free_errors(2000, VolumeDims::Three, (0.0, 2.0), in_l, 5.0, 3);
     report("3D L-shaped obstacle, n=2000", &err);
-    assert!(err[2].abs() < 0.02, "free fraction: {err:?}");
+    // Free fraction: only the raw hull's shortfall for uniform samples (see the cube above).
+    assert!((-0.05..0.0).contains(&err[2]), "free fraction: {err:?}");
     assert!(
         err[0] < -0.05 && err[1] < -0.03,
         "hull subtraction should be biased: {err:?}"

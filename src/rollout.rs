@@ -181,14 +181,23 @@ mod tests {
             range_max: 10.0,
             ranges: vec![f32::INFINITY; 360],
         };
-        let options = OccupancyOptions {
+        Occupancy::build(
+            &scan,
+            &UnitQuaternion::identity(),
+            1.0,
+            &optimistic_options(),
+        )
+    }
+
+    /// A 5 cm robot for which unseen space is free.
+    fn optimistic_options() -> OccupancyOptions {
+        OccupancyOptions {
             robot_radius: 0.05,
             robot_height: 0.0,
             unknown_space: UnknownSpace::Free,
             floor: None,
             ceiling: None,
-        };
-        Occupancy::build(&scan, &UnitQuaternion::identity(), 1.0, &options)
+        }
     }
 
     #[test]
@@ -235,14 +244,12 @@ mod tests {
             range_max: 100.0,
             ranges,
         };
-        let options = OccupancyOptions {
-            robot_radius: 0.05,
-            robot_height: 0.0,
-            unknown_space: UnknownSpace::Free,
-            floor: None,
-            ceiling: None,
-        };
-        let occupancy = Occupancy::build(&scan, &UnitQuaternion::identity(), 1.0, &options);
+        let occupancy = Occupancy::build(
+            &scan,
+            &UnitQuaternion::identity(),
+            1.0,
+            &optimistic_options(),
+        );
         let model = PointMass::new(4.0, 0.05, 0.0);
         let controls = sample(SamplerKind::BangBang, 500, 100, CommandAxes::Planar, 9);
         let rollout = roll_out(

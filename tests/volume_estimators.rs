@@ -326,3 +326,41 @@ fn translation_and_scale_behave() {
         }
     }
 }
+
+#[test]
+fn thin_and_far_clouds_stay_finite_and_scale_correctly() {
+    // A 2 × 1e-5 strip (2D) / 2 × 2 × 1e-5 slab (3D), rotated, 1e5 m from the origin, half
+    // terminal: every estimator must return the thin volume, not noise.
+    let mut rng = ChaCha8Rng::seed_from_u64(31);
+    let (c, s) = (0.6f64, 0.8f64);
+    for dims in [VolumeDims::Two, VolumeDims::Three] {
+        let pts: Vec<[f64; 3]> = (0..800)
+            .map(|_| {
+                let (u, w) = (rng.random_range(-1.0..1.0), rng.random_range(-5e-6..5e-6));
+                let z = if dims == VolumeDims::Three {
+                    rng.random_range(-1.0..1.0)
+                } else {
+                    0.0
+                };
+                [1e5 + c * u - s * w, -2e5 + s * u + c * w, z]
+            })
+            .collect();
+        let terminal: Vec<bool> = pts.iter().map(|p| p[0] - 1e5 > 0.0).collect();
+        let thin = if dims == VolumeDims::Two {
+            2.0 * 1e-5
+        } else {
+            4.0 * 1e-5
+        };
+        for kind in EstimatorKind::ALL {
+            let v = run(&pts, &terminal, dims, kind);
+            assert!(
+                (v.reachable / thin - 1.0).abs() < 0.1,
+                "{dims:?} {kind:?}: {v:?}"
+            );
+            assert!(
+                v.free > 0.2 * v.reachable && v.free < 0.8 * v.reachable,
+                "{kind:?}: {v:?}"
+            );
+        }
+    }
+}

@@ -40,7 +40,13 @@ fn estimate_timings() {
         (VolumeDims::Three, 150),
         (VolumeDims::Three, 2000),
     ] {
-        let scenes: Vec<_> = (0..16).map(|s| scene(n, dims.count(), s)).collect();
+        // `VOLUME_TIMING_SCENES=1` repeats one scene: the branch predictor then learns it and the
+        // timings drop to what a warm, unchanging input would cost.
+        let count = std::env::var("VOLUME_TIMING_SCENES")
+            .ok()
+            .and_then(|v| v.parse().ok())
+            .unwrap_or(16u64);
+        let scenes: Vec<_> = (0..count).map(|s| scene(n, dims.count(), s)).collect();
         for kind in EstimatorKind::ALL {
             // `VOLUME_TIMING=2-150-hull` (dims-n-kind) times one case only, e.g. for profiling.
             let case = format!("{}-{n}-{}", dims.count(), kind.name());

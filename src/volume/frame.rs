@@ -61,7 +61,28 @@ impl Frame {
         if !cov.iter().flatten().all(|v| v.is_finite()) {
             return None;
         }
-        let axes = principal_axes(&cov, dims);
+        Self::with_axes(points, dims, mean, principal_axes(&cov, dims))
+    }
+
+    /// The same cloud in a frame aligned with the coordinate axes (only translated and scaled):
+    /// the fallback for the rare clouds on which quickhull fails in the rotated principal frame
+    /// (many coplanar points, see [`super::hull::Polyhedron::hull`]).
+    pub(crate) fn axis_aligned(&self, points: &[[f64; 3]]) -> Option<Frame> {
+        let mut axes = [[0.0; 3]; 3];
+        for (a, axis) in axes.iter_mut().enumerate() {
+            axis[a] = 1.0;
+        }
+        Self::with_axes(points, self.dims, self.mean, axes)
+    }
+
+    /// Completes a frame from its origin and unit axes: the cloud's extent along each axis,
+    /// and the flatness rule.
+    fn with_axes(
+        points: &[[f64; 3]],
+        dims: usize,
+        mean: [f64; 3],
+        axes: [[f64; 3]; 3],
+    ) -> Option<Frame> {
         let mut lo = [f64::INFINITY; 3];
         let mut hi = [f64::NEG_INFINITY; 3];
         for p in points {

@@ -220,16 +220,22 @@ impl NeighbourGrid {
             return best;
         }
         let c = self.cell_of(q);
-        for r in 0.. {
-            self.visit_ring(c, r, |slots| {
-                let ids = &self.ids[slots.clone()];
-                for (p, &id) in self.sorted[slots].iter().zip(ids) {
-                    let d2 = dist2(p, q);
-                    if d2 < best.bound && id as usize != skip {
-                        best.offer(d2, id);
-                    }
-                }
-            });
+        // Ring 0 alone rarely holds k points: start with the whole 3 × 3 (× 3) block, whose
+        // rows are contiguous runs.
+        let block = |a: usize| (c[a].saturating_sub(1), (c[a] + 1).min(self.cells[a] - 1));
+        let ((x0, x1), (y0, y1), (z0, z1)) = (block(0), block(1), block(2));
+        for z in z0..=z1 {
+            for y in y0..=y1 {
+                self.scan(self.row(x0, x1, y, z), q, skip, &mut best);
+            }
+        }
+        for r in 1.. {
+            if r > 1 {
+                let reach2 = best.bound;
+                self.visit_ring(c, r, q, reach2, |slots| {
+                    self.scan(slots, q, skip, &mut best)
+                });
+            }
             match self.clearance(q, c, r) {
                 None => break,
                 Some(g) if best.bound <= g * g => break,
@@ -237,6 +243,17 @@ impl NeighbourGrid {
             }
         }
         best
+    }
+
+    /// Offers the points in `slots` (except index `skip`) to `best`.
+    fn scan(&self, slots: std::ops::Range<usize>, q: &[f64; 3], skip: usize, best: &mut Nearest) {
+        let ids = &self.ids[slots.clone()];
+        for (p, &id) in self.sorted[slots].iter().zip(ids) {
+            let d2 = dist2(p, q);
+            if d2 < best.bound && id as usize != skip {
+                best.offer(d2, id);
+            }
+        }
     }
 
     fn cell_of(&self, p: &[f64; 3]) -> [usize; 3] {
@@ -256,23 +273,53 @@ impl NeighbourGrid {
             ..self.start[self.cell_index([x1, y, z]) + 1] as usize
     }
 
-    /// Calls `f` with the slot ranges of the cells at Chebyshev distance exactly `r` from `c`.
-    fn visit_ring(&self, c: [usize; 3], r: usize, mut f: impl FnMut(std::ops::Range<usize>)) {
+    /// Calls `f` with the slot ranges of the cells at Chebyshev distance exactly `r` from `c`
+    /// that come closer to `q` than `sqrt(reach2)` (rows are trimmed to those cells).
+    fn visit_ring(
+        &self,
+        c: [usize; 3],
+        r: usize,
+        q: &[f64; 3],
+        reach2: f64,
+        mut f: impl FnMut(std::ops::Range<usize>),
+    ) {
         let span = |a: usize| (c[a].saturating_sub(r), (c[a] + r).min(self.cells[a] - 1));
         let (x0, x1) = span(0);
         let (y0, y1) = span(1);
         let (z0, z1) = span(2);
+        // Squared distance from q to the slab of cells `i` along axis `a`.
+        let gap2 = |a: usize, i: usize| {
+            let start = self.lo[a] + i as f64 * self.cell;
+            let g = (start - q[a]).max(q[a] - start - self.cell).max(0.0);
+            g * g
+        };
+        // Cells along x within reach, given the squared distance `used` across y and z.
+        let x_span = |used: f64| {
+            let room = (reach2 - used).sqrt();
+            let lo = ((q[0] - room - self.lo[0]) * self.inv_cell)
+                .floor()
+                .max(0.0) as usize;
+            let hi = ((q[0] + room - self.lo[0]) * self.inv_cell).floor();
+            (lo.max(x0), (hi.max(0.0) as usize).min(x1))
+        };
         for z in z0..=z1 {
             let z_face = z.abs_diff(c[2]) == r;
+            let gz = gap2(2, z);
             for y in y0..=y1 {
+                let used = gz + gap2(1, y);
+                if used >= reach2 {
+                    continue;
+                }
+                let (xa, xb) = x_span(used);
                 if z_face || y.abs_diff(c[1]) == r {
-                    f(self.row(x0, x1, y, z));
-                } else {
-                    if c[0] >= r {
-                        f(self.row(c[0] - r, c[0] - r, y, z));
+                    if xa <= xb {
+                        f(self.row(xa, xb, y, z));
                     }
-                    if c[0] + r < self.cells[0] {
-                        f(self.row(c[0] + r, c[0] + r, y, z));
+                } else {
+                    for x in [c[0].wrapping_sub(r), c[0] + r] {
+                        if (xa..=xb).contains(&x) {
+                            f(self.row(x, x, y, z));
+                        }
                     }
                 }
             }

@@ -126,41 +126,32 @@ impl Rk4 {
         }
     }
 
-    /// `x ← x + dt/6 · (k1 + 2 k2 + 2 k3 + k4)` with the actuation held over the step.
+    /// `x ← x + dt/6 · (k1 + 2 k2 + 2 k3 + k4)` with the actuation held over the step; each
+    /// slope is folded into the running sum in the same pass that builds the next stage.
     fn step(&mut self, model: &dyn Dynamics, state: &mut Batch, actuation: &Batch, dt: f32) {
+        self.sum.as_mut_slice().fill(0.0);
         model.derivative(state, actuation, &mut self.slope);
-        self.sum
-            .as_mut_slice()
-            .copy_from_slice(self.slope.as_slice());
-        for (weight, advance) in [(2.0, 0.5 * dt), (2.0, 0.5 * dt), (1.0, dt)] {
-            axpy(
-                self.stage.as_mut_slice(),
-                state.as_slice(),
-                advance,
-                self.slope.as_slice(),
-            );
-            model.derivative(&self.stage, actuation, &mut self.slope);
-            for (s, k) in self
-                .sum
+        for (weight, advance) in [(1.0, 0.5 * dt), (2.0, 0.5 * dt), (2.0, dt)] {
+            for ((stage, sum), (&x, &k)) in self
+                .stage
                 .as_mut_slice()
                 .iter_mut()
-                .zip(self.slope.as_slice())
+                .zip(self.sum.as_mut_slice())
+                .zip(state.as_slice().iter().zip(self.slope.as_slice()))
             {
-                *s += weight * k;
+                *sum += weight * k;
+                *stage = x + advance * k;
             }
+            model.derivative(&self.stage, actuation, &mut self.slope);
         }
-        let x = state.as_mut_slice();
-        for (x, s) in x.iter_mut().zip(self.sum.as_slice()) {
-            *x += dt / 6.0 * s;
+        for (x, (&sum, &k)) in state
+            .as_mut_slice()
+            .iter_mut()
+            .zip(self.sum.as_slice().iter().zip(self.slope.as_slice()))
+        {
+            *x += dt / 6.0 * (sum + k);
         }
         model.renormalize(state);
-    }
-}
-
-/// `out = x + a · k`, element-wise.
-fn axpy(out: &mut [f32], x: &[f32], a: f32, k: &[f32]) {
-    for ((o, x), k) in out.iter_mut().zip(x).zip(k) {
-        *o = x + a * k;
     }
 }
 

@@ -115,8 +115,7 @@ fn union(parent: &mut [u32], a: usize, b: usize) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use rand::{Rng, SeedableRng};
-    use rand_chacha::ChaCha8Rng;
+    use crate::volume::test_points::uniform_in_cube;
 
     fn clusters_of(points: &[[f64; 3]], terminal: &[bool]) -> Vec<Vec<u32>> {
         let grid = NeighbourGrid::new(points, 2);
@@ -180,18 +179,7 @@ mod tests {
         seed: u64,
         is_terminal: impl Fn(&[f64; 3]) -> bool,
     ) -> Vec<usize> {
-        let mut rng = ChaCha8Rng::seed_from_u64(seed);
-        let pts: Vec<[f64; 3]> = (0..n)
-            .map(|_| {
-                std::array::from_fn(|a| {
-                    if a < dims {
-                        rng.random_range(-1.0..1.0)
-                    } else {
-                        0.0
-                    }
-                })
-            })
-            .collect();
+        let pts = uniform_in_cube(n, dims, seed);
         let terminal: Vec<bool> = pts.iter().map(is_terminal).collect();
         let grid = NeighbourGrid::new(&pts, dims);
         let mut sizes: Vec<usize> = cluster_terminal(&grid, &pts, &terminal, k)

@@ -186,6 +186,7 @@ fn lower_envelope(near: &[(f64, f64, u32)], envelope: &mut Vec<(f64, usize)>) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::volume::test_points::uniform_in_cube;
     use rand::{Rng, SeedableRng};
     use rand_chacha::ChaCha8Rng;
 
@@ -229,18 +230,7 @@ mod tests {
         ] {
             let mut worst = 0.0_f64;
             for seed in 0..4 {
-                let mut rng = ChaCha8Rng::seed_from_u64(seed);
-                let pts: Vec<[f64; 3]> = (0..n)
-                    .map(|_| {
-                        std::array::from_fn(|a| {
-                            if a < dims {
-                                rng.random_range(-1.0..1.0)
-                            } else {
-                                0.0
-                            }
-                        })
-                    })
-                    .collect();
+                let pts = uniform_in_cube(n, dims, seed);
                 let terminal: Vec<bool> = pts
                     .iter()
                     .map(|p| p[0] > 0.6 || (p[0] + 0.5).powi(2) + (p[1] - 0.4).powi(2) < 0.09)

@@ -31,6 +31,8 @@ mod frame;
 mod free_fraction;
 mod hull;
 mod neighbours;
+#[cfg(test)]
+mod test_points;
 mod union;
 
 use hull::{efron_factor, Polygon, Polyhedron};

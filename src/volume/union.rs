@@ -23,38 +23,48 @@ pub(crate) const OVERLAP_COLUMNS: usize = 64;
 
 /// Area of the union of `polys` (m²), exact up to rounding.
 pub(crate) fn union_area(polys: &[Polygon]) -> f64 {
-    let groups = overlap_groups(polys.len(), |i, j| {
-        boxes_overlap(
-            &polys[i].lo(),
-            &polys[i].hi(),
-            &polys[j].lo(),
-            &polys[j].hi(),
-        )
-    });
-    groups
-        .iter()
-        .map(|g| match g.as_slice() {
-            [single] => polys[*single].area(),
-            _ => slab_union_area(&g.iter().map(|&i| &polys[i]).collect::<Vec<_>>()),
-        })
-        .sum()
+    union_by_groups(
+        polys,
+        Polygon::lo,
+        Polygon::hi,
+        Polygon::area,
+        slab_union_area,
+    )
 }
 
 /// Volume of the union of `polys` (m³); see the module documentation for the error.
 pub(crate) fn union_volume(polys: &[Polyhedron]) -> f64 {
-    let groups = overlap_groups(polys.len(), |i, j| {
+    union_by_groups(
+        polys,
+        Polyhedron::lo,
+        Polyhedron::hi,
+        Polyhedron::volume,
+        grid_union_volume,
+    )
+}
+
+/// The union's measure, one group of bodies with overlapping bounding boxes at a time: an
+/// isolated body contributes its own `measure`, a group the `group_union` of its members.
+fn union_by_groups<T, const D: usize>(
+    bodies: &[T],
+    lo: impl Fn(&T) -> [f64; D],
+    hi: impl Fn(&T) -> [f64; D],
+    measure: impl Fn(&T) -> f64,
+    group_union: impl Fn(&[&T]) -> f64,
+) -> f64 {
+    let groups = overlap_groups(bodies.len(), |i, j| {
         boxes_overlap(
-            &polys[i].lo(),
-            &polys[i].hi(),
-            &polys[j].lo(),
-            &polys[j].hi(),
+            &lo(&bodies[i]),
+            &hi(&bodies[i]),
+            &lo(&bodies[j]),
+            &hi(&bodies[j]),
         )
     });
     groups
         .iter()
         .map(|g| match g.as_slice() {
-            [single] => polys[*single].volume(),
-            _ => grid_union_volume(&g.iter().map(|&i| &polys[i]).collect::<Vec<_>>()),
+            [single] => measure(&bodies[*single]),
+            _ => group_union(&g.iter().map(|&i| &bodies[i]).collect::<Vec<_>>()),
         })
         .sum()
 }

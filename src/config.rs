@@ -63,14 +63,12 @@ impl ParameterSet {
         set
     }
 
-    /// The built-in defaults overlaid with the parameters file `path` for node `node_name`.
-    pub fn from_file(path: &Path, node_name: &str) -> Result<Self, ConfigError> {
+    /// Overlays the parameters file `path`'s section for node `node_name`.
+    pub fn merge_file(&mut self, path: &Path, node_name: &str) -> Result<(), ConfigError> {
         let source = path.display().to_string();
         let text = std::fs::read_to_string(path)
             .map_err(|e| ConfigError::new(&source, format!("cannot read the file: {e}")))?;
-        let mut set = Self::builtin();
-        set.merge_yaml(&text, &source, path.parent(), node_name)?;
-        Ok(set)
+        self.merge_yaml(&text, &source, path.parent(), node_name)
     }
 
     /// Overlays one `name:=value` assignment from the command line (the value is read as YAML).
@@ -318,7 +316,7 @@ pub struct Settings {
 }
 
 /// The parameter names [`Settings`] owns — a contract with users' parameter files.
-pub const SETTINGS_PARAMETERS: [&str; 16] = [
+pub const SETTINGS_PARAMETERS: [&str; 15] = [
     "robot_description",
     "model",
     "horizon",
@@ -334,7 +332,6 @@ pub const SETTINGS_PARAMETERS: [&str; 16] = [
     "unknown_space",
     "floor_height",
     "ceiling_height",
-    "use_sim_time",
 ];
 
 /// Largest accepted trajectory count and step count: beyond these an evaluation takes seconds.
@@ -344,11 +341,7 @@ const MAX_STEPS: u64 = 10_000;
 impl Settings {
     /// The built-in defaults: the paper's settings with the Crazyflie 2.x.
     pub fn builtin() -> Self {
-        let mut set = ParameterSet::builtin();
-        let settings = Self::take_from(&mut set).expect("the built-in config is valid");
-        set.finish(&SETTINGS_PARAMETERS)
-            .expect("the built-in config has no unknown parameters");
-        settings
+        Self::load(None, DEFAULT_NODE_NAME, &[]).expect("the built-in config is valid")
     }
 
     /// Loads a parameters file for node `node_name`, applies `-p` overrides, and validates.
@@ -357,16 +350,8 @@ impl Settings {
         node_name: &str,
         overrides: &[String],
     ) -> Result<Self, ConfigError> {
-        let mut set = match path {
-            Some(path) => ParameterSet::from_file(path, node_name)?,
-            None => ParameterSet::builtin(),
-        };
-        for assignment in overrides {
-            set.assign(assignment)?;
-        }
-        let settings = Self::take_from(&mut set)?;
-        set.finish(&SETTINGS_PARAMETERS)?;
-        Ok(settings)
+        let paths: Vec<&Path> = path.into_iter().collect();
+        load_all(&paths, node_name, overrides).map(|(settings, _)| settings)
     }
 
     /// Takes and validates this struct's parameters from `set`, leaving the others.
@@ -428,8 +413,6 @@ impl Settings {
                 ));
             }
         }
-        // Accepted for ROS compatibility; the node reads it (simulated time only changes stamps).
-        set.take("use_sim_time");
         Ok(Self {
             robot_description,
             model,
@@ -459,6 +442,107 @@ fn required<T>(name: &str, value: Option<T>) -> Result<T, ConfigError> {
             format!("'{name}' must be set (the built-in config sets it; a file or -p cleared it)"),
         )
     })
+}
+
+/// The node's ROS interface: topic and service names, and input staleness.
+#[derive(Debug, Clone, PartialEq)]
+pub struct NodeSettings {
+    /// `nav_msgs/Odometry` input.
+    pub odom_topic: String,
+    /// `sensor_msgs/LaserScan` input (sensor-data QoS).
+    pub scan_topic: String,
+    /// Optional `geometry_msgs/PoseStamped` goal for the task reward.
+    pub goal_topic: String,
+    /// `cstep_msgs/Empowerment` output.
+    pub empowerment_topic: String,
+    /// `cstep_msgs/EmpoweredReward` output.
+    pub reward_topic: String,
+    /// `cstep_msgs/srv/Evaluate` service.
+    pub evaluate_service: String,
+    /// Odometry older than this when a scan arrives is stale, seconds.
+    pub input_timeout: f64,
+    /// Stamp outputs and measure ages with `/clock`.
+    pub use_sim_time: bool,
+}
+
+/// The parameter names [`NodeSettings`] owns.
+pub const NODE_PARAMETERS: [&str; 8] = [
+    "odom_topic",
+    "scan_topic",
+    "goal_topic",
+    "empowerment_topic",
+    "reward_topic",
+    "evaluate_service",
+    "input_timeout",
+    "use_sim_time",
+];
+
+impl NodeSettings {
+    /// Takes and validates this struct's parameters from `set`, leaving the others.
+    pub fn take_from(set: &mut ParameterSet) -> Result<Self, ConfigError> {
+        let mut name = |key: &str| -> Result<String, ConfigError> {
+            let (value, source) = required(key, set.take_string(key)?)?;
+            if value.is_empty() || value.contains(char::is_whitespace) {
+                return Err(ConfigError::new(
+                    &source,
+                    format!("'{key}' must be a ROS name without spaces, got \"{value}\""),
+                ));
+            }
+            Ok(value)
+        };
+        let odom_topic = name("odom_topic")?;
+        let scan_topic = name("scan_topic")?;
+        let goal_topic = name("goal_topic")?;
+        let empowerment_topic = name("empowerment_topic")?;
+        let reward_topic = name("reward_topic")?;
+        let evaluate_service = name("evaluate_service")?;
+        let input_timeout = required("input_timeout", positive(set, "input_timeout")?)?;
+        let use_sim_time = match set.take("use_sim_time") {
+            None | Some((Value::Null, _)) => false,
+            Some((Value::Bool(b), _)) => b,
+            Some((other, source)) => {
+                return Err(ConfigError::new(
+                    &source,
+                    format!("'use_sim_time' must be true or false, got {}", show(&other)),
+                ))
+            }
+        };
+        Ok(Self {
+            odom_topic,
+            scan_topic,
+            goal_topic,
+            empowerment_topic,
+            reward_topic,
+            evaluate_service,
+            input_timeout,
+            use_sim_time,
+        })
+    }
+}
+
+/// Loads the built-in defaults, then each parameters file in order, then the `-p` overrides,
+/// for node `node_name`; validates everything and rejects unknown names.
+pub fn load_all(
+    paths: &[&Path],
+    node_name: &str,
+    overrides: &[String],
+) -> Result<(Settings, NodeSettings), ConfigError> {
+    let mut set = ParameterSet::builtin();
+    for path in paths {
+        set.merge_file(path, node_name)?;
+    }
+    for assignment in overrides {
+        set.assign(assignment)?;
+    }
+    let node = NodeSettings::take_from(&mut set)?;
+    let settings = Settings::take_from(&mut set)?;
+    let known: Vec<&str> = SETTINGS_PARAMETERS
+        .iter()
+        .chain(&NODE_PARAMETERS)
+        .copied()
+        .collect();
+    set.finish(&known)?;
+    Ok((settings, node))
 }
 
 fn named<T>(

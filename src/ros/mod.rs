@@ -5,5 +5,6 @@
 //! `sensor_msgs/LaserScan` (as JSON for `cstep eval`, as CDR on the wire for the node),
 //! validates them, and writes `cstep_msgs` results.
 
+pub mod args;
 pub mod convert;
 pub mod messages;

@@ -9,7 +9,7 @@ use serde::Serialize;
 use cstep::config::{Settings, DEFAULT_NODE_NAME};
 use cstep::estimator::Estimator;
 use cstep::reward::{empowered_reward, task_reward};
-use cstep::ros::convert::{laser_scan_to_scan, odometry_to_state};
+use cstep::ros::convert::{empowerment_message, laser_scan_to_scan, odometry_to_state};
 use cstep::ros::messages::{Empowerment, Header, LaserScan, Odometry};
 
 use super::Format;
@@ -76,23 +76,12 @@ pub fn run(args: EvalArgs) -> Result<(), String> {
         settings.safety_coefficient,
         task_reward(&state.position, goal.as_ref()),
     );
+    let header = Header {
+        stamp: scan_msg.header.stamp,
+        frame_id: odom.header.frame_id.clone(),
+    };
     let output = EvalOutput {
-        empowerment: Empowerment {
-            header: Header {
-                stamp: scan_msg.header.stamp,
-                frame_id: odom.header.frame_id.clone(),
-            },
-            empowerment: estimate.empowerment,
-            reachable_volume: estimate.volumes.reachable,
-            terminal_volume: estimate.volumes.terminal,
-            free_volume: estimate.volumes.free,
-            safety_coefficient: settings.safety_coefficient,
-            horizon: estimate.horizon,
-            num_trajectories: estimate.num_trajectories as u32,
-            num_colliding: estimate.num_colliding as u32,
-            valid: estimate.valid(),
-            status: estimate.status.as_str().to_owned(),
-        },
+        empowerment: empowerment_message(header, &estimate, settings.safety_coefficient),
         reward: reward.reward,
         task_reward: reward.task_reward,
         empowerment_term: reward.empowerment_term,

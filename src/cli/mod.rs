@@ -2,6 +2,7 @@
 
 mod bench;
 mod eval;
+mod node;
 
 use clap::{Parser, Subcommand};
 
@@ -17,6 +18,8 @@ pub struct Cli {
 enum Command {
     /// Evaluate C-STEP once, offline, for an odometry and a scan message given as JSON.
     Eval(eval::EvalArgs),
+    /// Run the ROS 2 node: odometry and scans in, empowerment and rewards out.
+    Node(node::NodeArgs),
     /// Measure evaluation speed on a fixed scene (one core unless --threads says otherwise).
     Bench(bench::BenchArgs),
 }
@@ -26,6 +29,7 @@ pub fn run(cli: Cli) -> Result<(), String> {
     match cli.command {
         Command::Eval(args) => eval::run(args),
         Command::Bench(args) => bench::run(args),
+        Command::Node(args) => node::run(args),
     }
 }
 

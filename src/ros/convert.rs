@@ -7,8 +7,10 @@
 
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 
-use super::messages::{LaserScan, Odometry};
+use super::messages::{EmpoweredReward, Empowerment, Header, LaserScan, Odometry};
+use crate::estimator::Estimate;
 use crate::occupancy::Scan;
+use crate::reward::Reward;
 use crate::state::RobotState;
 
 /// More beams than any real 2D LiDAR produces; larger scans are rejected, not processed.
@@ -158,6 +160,35 @@ pub fn laser_scan_to_scan(msg: &LaserScan) -> Result<Scan, InputError> {
         range_max: msg.range_max as f64,
         ranges: msg.ranges.clone(),
     })
+}
+
+/// The `cstep_msgs/Empowerment` for an estimate made with safety coefficient `c`.
+pub fn empowerment_message(header: Header, estimate: &Estimate, c: f64) -> Empowerment {
+    Empowerment {
+        header,
+        empowerment: estimate.empowerment,
+        reachable_volume: estimate.volumes.reachable,
+        terminal_volume: estimate.volumes.terminal,
+        free_volume: estimate.volumes.free,
+        safety_coefficient: c,
+        horizon: estimate.horizon,
+        num_trajectories: estimate.num_trajectories as u32,
+        num_colliding: estimate.num_colliding as u32,
+        valid: estimate.valid(),
+        status: estimate.status.as_str().to_owned(),
+    }
+}
+
+/// The `cstep_msgs/EmpoweredReward` for a reward computed with safety coefficient `c`.
+pub fn reward_message(header: Header, reward: &Reward, c: f64, valid: bool) -> EmpoweredReward {
+    EmpoweredReward {
+        header,
+        reward: reward.reward,
+        task_reward: reward.task_reward,
+        empowerment_term: reward.empowerment_term,
+        safety_coefficient: c,
+        valid,
+    }
 }
 
 #[cfg(test)]

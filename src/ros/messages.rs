@@ -231,6 +231,87 @@ pub struct EmpoweredReward {
     pub valid: bool,
 }
 
+/// `geometry_msgs/PoseStamped`: the optional goal input.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct PoseStamped {
+    /// Stamp and frame.
+    pub header: Header,
+    /// The goal pose.
+    pub pose: Pose,
+}
+
+/// `cstep_msgs/srv/Evaluate` request: one state to score, synchronously.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct EvaluateRequest {
+    /// The robot's state.
+    pub odom: Odometry,
+    /// What its LiDAR sees.
+    pub scan: LaserScan,
+    /// Goal position for the task reward (used when `has_goal`).
+    pub goal: Point,
+    /// Whether `goal` is set.
+    pub has_goal: bool,
+}
+
+/// `cstep_msgs/srv/Evaluate` response.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct EvaluateResponse {
+    /// The score.
+    pub empowerment: Empowerment,
+    /// The reward.
+    pub reward: EmpoweredReward,
+}
+
+/// `diagnostic_msgs/KeyValue`.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct KeyValue {
+    /// Name of the value.
+    pub key: String,
+    /// The value, as text.
+    pub value: String,
+}
+
+/// `diagnostic_msgs/DiagnosticStatus`.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct DiagnosticStatus {
+    /// 0 OK, 1 WARN, 2 ERROR, 3 STALE.
+    pub level: u8,
+    /// Component name.
+    pub name: String,
+    /// Human-readable summary.
+    pub message: String,
+    /// Hardware identifier.
+    pub hardware_id: String,
+    /// Details.
+    pub values: Vec<KeyValue>,
+}
+
+/// `diagnostic_msgs/DiagnosticArray`.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct DiagnosticArray {
+    /// Stamp.
+    pub header: Header,
+    /// One status per component.
+    pub status: Vec<DiagnosticStatus>,
+}
+
+/// Every type here travels over DDS with ros2-client.
+macro_rules! ros_messages {
+    ($($t:ty),*) => { $(impl ros2_client::Message for $t {})* };
+}
+ros_messages!(
+    Odometry,
+    LaserScan,
+    PoseStamped,
+    Empowerment,
+    EmpoweredReward,
+    EvaluateRequest,
+    EvaluateResponse,
+    DiagnosticArray
+);
+
 /// Float arrays that read JSON's stand-ins for non-finite numbers and pass binary formats
 /// through untouched.
 mod lenient_floats {

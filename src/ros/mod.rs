@@ -8,3 +8,4 @@
 pub mod args;
 pub mod convert;
 pub mod messages;
+pub mod node;

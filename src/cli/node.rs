@@ -1,0 +1,37 @@
+//! `cstep node`: run the ROS 2 node.
+
+use std::path::PathBuf;
+
+use cstep::ros::args::RosArgs;
+
+/// Arguments of `cstep node`.
+#[derive(Debug, clap::Args)]
+pub struct NodeArgs {
+    /// Parameters file (ros__parameters YAML); the built-in defaults apply without one.
+    #[arg(long)]
+    config: Option<PathBuf>,
+    /// ROS arguments: `--ros-args [--params-file F] [-p name:=value] [-r from:=to] [--]`.
+    #[arg(
+        trailing_var_arg = true,
+        allow_hyphen_values = true,
+        value_name = "ROS_ARGS"
+    )]
+    ros_args: Vec<String>,
+}
+
+/// Runs `cstep node` until Ctrl-C.
+pub fn run(args: NodeArgs) -> Result<(), String> {
+    if let Some(first) = args.ros_args.first() {
+        if first != "--ros-args" {
+            return Err(format!(
+                "unexpected argument \"{first}\" (ROS arguments follow --ros-args)"
+            ));
+        }
+    }
+    let ros_args = RosArgs::parse(&args.ros_args)?;
+    if std::env::var_os("ROS_DISTRO").is_none() {
+        // ros2-client warns at start-up without it; cstep speaks Jazzy.
+        std::env::set_var("ROS_DISTRO", "jazzy");
+    }
+    cstep::ros::node::run(args.config.as_slice(), &ros_args)
+}

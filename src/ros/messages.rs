@@ -231,6 +231,30 @@ pub struct EmpoweredReward {
     pub valid: bool,
 }
 
+/// Request of `cstep_msgs/srv/Evaluate`: one state to score, synchronously.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct EvaluateRequest {
+    /// Robot state: pose in `header.frame_id`, twist in the body frame.
+    pub odom: Odometry,
+    /// The LiDAR scan taken at that state.
+    pub scan: LaserScan,
+    /// Goal position for the task reward (odometry frame); used only when `has_goal`.
+    pub goal: Point,
+    /// Whether `goal` is set; without it the task reward is 1.
+    pub has_goal: bool,
+}
+
+/// Response of `cstep_msgs/srv/Evaluate`: the same two messages the node publishes.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct EvaluateResponse {
+    /// The C-STEP score of the requested state.
+    pub empowerment: Empowerment,
+    /// The empowered reward of the requested state.
+    pub reward: EmpoweredReward,
+}
+
 /// Float arrays that read JSON's stand-ins for non-finite numbers and pass binary formats
 /// through untouched.
 mod lenient_floats {

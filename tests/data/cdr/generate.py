@@ -1,0 +1,257 @@
+"""Generate the CDR fixtures in this folder with real rclpy (ROS 2 Jazzy, Fast DDS).
+
+Each ``NAME.cdr`` is what ``rclpy.serialization.serialize_message`` returns for the message
+built by ``NAME`` below: the 4-byte encapsulation header (``00 01 00 00``: plain CDR,
+little-endian) followed by the CDR body, with one normalisation: the alignment padding bytes
+are set to zero. Fast CDR (behind rmw_fastrtps) does not write its padding bytes, so they hold
+whatever the buffer held before and differ from run to run; CDR gives them no meaning and
+readers skip them. ``zero_padding`` finds them by walking the message's layout from rclpy's own
+type introspection (``SLOT_TYPES``) and checks the walk ends exactly at the end of the bytes.
+
+``tests/cdr_roundtrip.rs`` decodes each file with the Rust mirrors in ``src/ros/messages.rs``,
+checks the values set here, re-encodes and expects the same bytes; ``tests/python/
+test_cdr_fixtures.py`` regenerates them and expects the committed files, so the fixtures
+provably come from rclpy.
+
+Regenerate after changing a message (``make venv`` first):
+    .venv/bin/python tests/data/cdr/generate.py
+"""
+
+import importlib
+import math
+import struct
+import sys
+from pathlib import Path
+
+from builtin_interfaces.msg import Time
+from cstep_msgs.msg import EmpoweredReward, Empowerment
+from cstep_msgs.srv import Evaluate
+from geometry_msgs.msg import Point
+from nav_msgs.msg import Odometry
+from rclpy.serialization import serialize_message
+from rosidl_parser.definition import (
+    AbstractNestedType,
+    AbstractString,
+    AbstractWString,
+    Array,
+    BasicType,
+    NamespacedType,
+)
+from sensor_msgs.msg import LaserScan
+from std_msgs.msg import Header
+
+HERE = Path(__file__).resolve().parent
+
+# The encapsulation header rclpy puts before the body: CDR (XCDR1), little-endian, no options.
+ENCAPSULATION_CDR_LE = b"\x00\x01\x00\x00"
+
+# Size (= CDR alignment) of each rosidl basic type.
+BASIC_SIZES = {
+    "boolean": 1, "octet": 1, "char": 1, "int8": 1, "uint8": 1,
+    "int16": 2, "uint16": 2, "wchar": 2,
+    "float": 4, "int32": 4, "uint32": 4,
+    "double": 8, "int64": 8, "uint64": 8,
+}  # fmt: skip
+
+
+class _Walker:
+    """Walks a CDR body along a rosidl type, collecting the alignment padding offsets."""
+
+    def __init__(self, body: bytes) -> None:
+        self.body = body
+        self.pos = 0
+        self.padding: list[int] = []
+
+    def align(self, n: int) -> None:
+        while self.pos % n:
+            self.padding.append(self.pos)
+            self.pos += 1
+
+    def take(self, n: int) -> None:
+        if self.pos + n > len(self.body):
+            raise ValueError(f"CDR body ends at {len(self.body)}, field needs {self.pos + n}")
+        self.pos += n
+
+    def u32(self) -> int:
+        self.align(4)
+        (value,) = struct.unpack_from("<I", self.body, self.pos)
+        self.take(4)
+        return value
+
+    def walk(self, slot) -> None:
+        if isinstance(slot, BasicType):
+            size = BASIC_SIZES[slot.typename]
+            self.align(size)
+            self.take(size)
+        elif isinstance(slot, AbstractString):
+            self.take(self.u32())  # length includes the terminating NUL
+        elif isinstance(slot, AbstractWString):
+            self.take(2 * self.u32())
+        elif isinstance(slot, AbstractNestedType):
+            count = slot.size if isinstance(slot, Array) else self.u32()
+            for _ in range(count):
+                self.walk(slot.value_type)
+        elif isinstance(slot, NamespacedType):
+            module = importlib.import_module(".".join(slot.namespaces))
+            for field in getattr(module, slot.name).SLOT_TYPES:
+                self.walk(field)
+        else:
+            raise TypeError(f"no CDR layout for {slot!r}")
+
+
+def zero_padding(data: bytes, msg_type) -> bytes:
+    """``data`` (encapsulation header + CDR body of a ``msg_type``) with its padding zeroed."""
+    if data[:4] != ENCAPSULATION_CDR_LE:
+        raise ValueError(f"expected the CDR little-endian header, got {data[:4].hex()}")
+    walker = _Walker(data[4:])
+    for slot in msg_type.SLOT_TYPES:
+        walker.walk(slot)
+    if walker.pos != len(walker.body):
+        raise ValueError(f"layout ends at {walker.pos}, the body has {len(walker.body)} bytes")
+    body = bytearray(walker.body)
+    for offset in walker.padding:
+        body[offset] = 0
+    return ENCAPSULATION_CDR_LE + bytes(body)
+
+
+def serialize(msg) -> bytes:
+    """rclpy's CDR bytes of ``msg``, padding zeroed."""
+    return zero_padding(serialize_message(msg), type(msg))
+
+
+def header() -> Header:
+    # A 9-byte frame_id (with its NUL) leaves the next field unaligned: padding gets exercised.
+    return Header(stamp=Time(sec=1_700_000_123, nanosec=456_789_012), frame_id="base_scan")
+
+
+def odometry() -> Odometry:
+    msg = Odometry()
+    msg.header = Header(stamp=Time(sec=42, nanosec=500_000_000), frame_id="odom")
+    msg.child_frame_id = "base_link"
+    msg.pose.pose.position.x = 1.25
+    msg.pose.pose.position.y = -0.1
+    msg.pose.pose.position.z = 0.75
+    half = math.pi / 8.0  # yaw of pi/4 about z
+    msg.pose.pose.orientation.z = math.sin(half)
+    msg.pose.pose.orientation.w = math.cos(half)
+    msg.pose.covariance = [0.01 * i for i in range(36)]
+    msg.twist.twist.linear.x = 1.0
+    msg.twist.twist.linear.y = -0.5
+    msg.twist.twist.linear.z = 0.05
+    msg.twist.twist.angular.z = 0.3
+    msg.twist.covariance = [-1.0 * i for i in range(36)]
+    return msg
+
+
+def laser_scan() -> LaserScan:
+    msg = LaserScan()
+    msg.header = Header(stamp=Time(sec=42, nanosec=499_000_000), frame_id="laser")
+    msg.angle_min = -math.pi
+    msg.angle_max = math.pi - 2.0 * math.pi / 8.0
+    msg.angle_increment = 2.0 * math.pi / 8.0
+    msg.time_increment = 1.0e-4
+    msg.scan_time = 0.025
+    msg.range_min = 0.05
+    msg.range_max = 3.5
+    # REP 117: +inf no return, NaN invalid, -inf too close to measure.
+    msg.ranges = [0.5, math.inf, math.nan, -math.inf, 1.25, 3.0, 0.1, 2.75]
+    msg.intensities = [100.0, 0.0, 0.0, 0.0, 57.5, 12.0, 255.0, 1.5]
+    return msg
+
+
+def laser_scan_empty() -> LaserScan:
+    # No beams and an empty frame_id: empty sequences and strings are encoded too.
+    return LaserScan(header=Header(stamp=Time(sec=0, nanosec=0), frame_id=""))
+
+
+def empowerment() -> Empowerment:
+    return Empowerment(
+        header=Header(stamp=Time(sec=42, nanosec=499_000_000), frame_id="odom"),
+        empowerment=math.log(3.25),
+        reachable_volume=4.0,
+        terminal_volume=0.75,
+        free_volume=3.25,
+        safety_coefficient=0.5,
+        horizon=1.0,
+        num_trajectories=150,
+        num_colliding=27,
+        valid=True,
+        status="ok",
+    )
+
+
+def empowered_reward() -> EmpoweredReward:
+    return EmpoweredReward(
+        header=Header(stamp=Time(sec=42, nanosec=499_000_000), frame_id="odom"),
+        reward=math.exp(-2.0) * math.log(0.5 * 3.25),
+        task_reward=math.exp(-2.0),
+        empowerment_term=math.log(0.5 * 3.25),
+        safety_coefficient=0.5,
+        valid=True,
+    )
+
+
+def evaluate_request() -> Evaluate.Request:
+    return Evaluate.Request(
+        odom=odometry(),
+        scan=laser_scan(),
+        goal=Point(x=4.0, y=0.0, z=1.0),
+        has_goal=True,
+    )
+
+
+def evaluate_response() -> Evaluate.Response:
+    floor = math.log(1e-4)
+    return Evaluate.Response(
+        empowerment=Empowerment(
+            header=Header(stamp=Time(sec=7, nanosec=1), frame_id="map"),
+            empowerment=floor,
+            reachable_volume=2.5,
+            terminal_volume=2.5,
+            free_volume=0.0,
+            safety_coefficient=1.0,
+            horizon=1.5,
+            num_trajectories=2000,
+            num_colliding=2000,
+            valid=False,
+            status="every trajectory collides",
+        ),
+        reward=EmpoweredReward(
+            header=Header(stamp=Time(sec=7, nanosec=1), frame_id="map"),
+            reward=floor,
+            task_reward=1.0,
+            empowerment_term=floor,
+            safety_coefficient=1.0,
+            valid=False,
+        ),
+    )
+
+
+# File stem -> message factory. The Rust test reads the same names.
+FIXTURES = {
+    "header": header,
+    "odometry": odometry,
+    "laser_scan": laser_scan,
+    "laser_scan_empty": laser_scan_empty,
+    "empowerment": empowerment,
+    "empowered_reward": empowered_reward,
+    "evaluate_request": evaluate_request,
+    "evaluate_response": evaluate_response,
+}
+
+
+def serialize_all() -> dict[str, bytes]:
+    """Every fixture's bytes as rclpy serializes them (padding zeroed), by file name."""
+    return {f"{name}.cdr": serialize(make()) for name, make in FIXTURES.items()}
+
+
+def main() -> int:
+    out = Path(sys.argv[1]) if len(sys.argv) > 1 else HERE
+    for name, data in serialize_all().items():
+        (out / name).write_bytes(data)
+        print(f"{out / name}: {len(data)} bytes")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,143 @@
+"""Shared fixtures for the Python end-to-end tests: real rclpy over real DDS, on localhost only.
+
+Every test runs in its own ROS domain (``ROS_DOMAIN_ID``) with
+``ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST``, set for this process and inherited by every peer
+process a test starts, so tests never see each other's traffic and nothing leaves the machine.
+"""
+
+import itertools
+import os
+import queue
+import subprocess
+import sys
+import threading
+import time
+from collections.abc import Callable, Iterator
+from pathlib import Path
+
+import pytest
+import rclpy
+from rclpy.context import Context
+from rclpy.executors import SingleThreadedExecutor
+
+HERE = Path(__file__).resolve().parent
+REPO = HERE.parent.parent
+
+# Domains 1..100 (0 is everyone's default; Fast DDS ports stay clear of the ephemeral range
+# up to 101). Start at an offset from this process id so that two test runs on one machine
+# (two worktrees, say) are unlikely to share a domain; CSTEP_TEST_DOMAIN_BASE pins the start.
+_BASE = int(os.environ.get("CSTEP_TEST_DOMAIN_BASE", os.getpid() % 100))
+_DOMAINS = (1 + (_BASE + i) % 100 for i in itertools.count())
+
+# How long to wait for discovery and replies before a test fails (discovery takes 1-4 s).
+DISCOVERY_TIMEOUT_S = 20.0
+
+
+@pytest.fixture(autouse=True)
+def ros_domain(monkeypatch: pytest.MonkeyPatch) -> int:
+    """This test's own ROS domain id; also sets localhost-only discovery."""
+    domain = next(_DOMAINS)
+    monkeypatch.setenv("ROS_DOMAIN_ID", str(domain))
+    monkeypatch.setenv("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
+    monkeypatch.delenv("ROS_LOCALHOST_ONLY", raising=False)  # deprecated; the range rules
+    monkeypatch.delenv("ROS_STATIC_PEERS", raising=False)
+    monkeypatch.setenv("RMW_IMPLEMENTATION", "rmw_fastrtps_cpp")
+    return domain
+
+
+@pytest.fixture
+def ros_context(ros_domain: int) -> Iterator[Context]:
+    """An initialised rclpy context of its own on this test's domain, shut down afterwards."""
+    context = Context()
+    rclpy.init(context=context, domain_id=ros_domain)
+    try:
+        yield context
+    finally:
+        context.try_shutdown()
+
+
+@pytest.fixture
+def executor(ros_context: Context) -> Iterator[SingleThreadedExecutor]:
+    """A single-threaded executor on this test's context."""
+    ex = SingleThreadedExecutor(context=ros_context)
+    try:
+        yield ex
+    finally:
+        ex.shutdown()
+
+
+def wait_until(
+    condition: Callable[[], bool],
+    what: str,
+    executor: SingleThreadedExecutor | None = None,
+    timeout: float = DISCOVERY_TIMEOUT_S,
+) -> None:
+    """Poll ``condition`` (spinning ``executor`` if given) until true; fail after ``timeout``."""
+    deadline = time.monotonic() + timeout
+    while not condition():
+        if time.monotonic() > deadline:
+            pytest.fail(f"timed out after {timeout:.0f} s waiting for {what}")
+        if executor is not None:
+            executor.spin_once(timeout_sec=0.05)
+        else:
+            time.sleep(0.02)
+
+
+class Peer:
+    """A helper ROS process (``ros_peer.py``) that this test started; killed by its PID."""
+
+    def __init__(self, *args: str) -> None:
+        self.proc = subprocess.Popen(
+            [sys.executable, str(HERE / "ros_peer.py"), *args],
+            stdout=subprocess.PIPE,
+            stderr=subprocess.STDOUT,
+            text=True,
+            cwd=REPO,
+        )
+        self.lines: queue.Queue[str | None] = queue.Queue()
+        self.output: list[str] = []
+        threading.Thread(target=self._read, daemon=True).start()
+
+    def _read(self) -> None:
+        assert self.proc.stdout is not None
+        for line in self.proc.stdout:
+            self.lines.put(line.rstrip("\n"))
+        self.lines.put(None)
+
+    def expect(self, prefix: str, timeout: float = DISCOVERY_TIMEOUT_S) -> str:
+        """The rest of the peer's next output line that starts with ``prefix``."""
+        deadline = time.monotonic() + timeout
+        while True:
+            left = deadline - time.monotonic()
+            try:
+                line = self.lines.get(timeout=max(left, 0.0))
+            except queue.Empty:
+                pytest.fail(f"peer printed no {prefix!r} within {timeout:.0f} s: {self.output}")
+            if line is None:
+                code = self.proc.wait()
+                pytest.fail(f"peer exited ({code}) before {prefix!r}: {self.output}")
+            self.output.append(line)
+            if line.startswith(prefix):
+                return line[len(prefix) :]
+
+    def stop(self) -> None:
+        if self.proc.poll() is None:
+            self.proc.kill()  # by PID: this very process, nothing else
+        self.proc.wait(timeout=10)
+
+
+@pytest.fixture
+def start_peer() -> Iterator[Callable[..., Peer]]:
+    """Start ``ros_peer.py`` processes; every one is killed when the test ends."""
+    peers: list[Peer] = []
+
+    def start(*args: str) -> Peer:
+        peer = Peer(*args)
+        peers.append(peer)
+        return peer
+
+    try:
+        yield start
+    finally:
+        for peer in peers:
+            peer.stop()

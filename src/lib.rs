@@ -18,10 +18,12 @@
 //!
 //! [`config`] reads the node's `ros__parameters` YAML; [`ros`] holds the ROS message mirrors.
 
+pub mod arena;
 pub mod config;
 pub mod estimator;
 pub mod model;
 pub mod occupancy;
+pub mod plot;
 pub mod reward;
 pub mod rollout;
 pub mod ros;

@@ -1,6 +1,7 @@
 //! Command-line interface: one file per subcommand.
 
 mod bench;
+mod demo;
 mod eval;
 mod node;
 
@@ -18,6 +19,8 @@ pub struct Cli {
 enum Command {
     /// Evaluate C-STEP once, offline, for an odometry and a scan message given as JSON.
     Eval(eval::EvalArgs),
+    /// The node and a simulated drone flying the paper's arena, over real DDS on localhost.
+    Demo(demo::DemoArgs),
     /// Run the ROS 2 node: odometry and scans in, empowerment and rewards out.
     Node(node::NodeArgs),
     /// Measure evaluation speed on a fixed scene (one core unless --threads says otherwise).
@@ -30,6 +33,7 @@ pub fn run(cli: Cli) -> Result<(), String> {
         Command::Eval(args) => eval::run(args),
         Command::Bench(args) => bench::run(args),
         Command::Node(args) => node::run(args),
+        Command::Demo(args) => demo::run(args),
     }
 }
 

@@ -1,6 +1,8 @@
 //! `cstep node`: run the ROS 2 node.
 
 use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
 
 use cstep::ros::args::RosArgs;
 
@@ -33,5 +35,14 @@ pub fn run(args: NodeArgs) -> Result<(), String> {
         // ros2-client warns at start-up without it; cstep speaks Jazzy.
         std::env::set_var("ROS_DISTRO", "jazzy");
     }
-    cstep::ros::node::run(args.config.as_slice(), &ros_args)
+    cstep::ros::node::run(args.config.as_slice(), &ros_args, stop_on_ctrl_c()?)
+}
+
+/// A flag that Ctrl-C (SIGINT) or SIGTERM sets, so the node can leave the DDS domain cleanly.
+pub fn stop_on_ctrl_c() -> Result<Arc<AtomicBool>, String> {
+    let stop = Arc::new(AtomicBool::new(false));
+    let flag = stop.clone();
+    ctrlc::set_handler(move || flag.store(true, Ordering::SeqCst))
+        .map_err(|e| format!("cannot install the Ctrl-C handler: {e}"))?;
+    Ok(stop)
 }

@@ -162,6 +162,21 @@ pub fn laser_scan_to_scan(msg: &LaserScan) -> Result<Scan, InputError> {
     })
 }
 
+/// The `LaserScan` message for a scan (the inverse of [`laser_scan_to_scan`]).
+pub fn scan_to_laser_scan(scan: &Scan, header: super::messages::Header) -> LaserScan {
+    let beams = scan.ranges.len().max(1) as f64;
+    LaserScan {
+        header,
+        angle_min: scan.angle_min as f32,
+        angle_max: (scan.angle_min + scan.angle_increment * (beams - 1.0)) as f32,
+        angle_increment: scan.angle_increment as f32,
+        range_min: scan.range_min as f32,
+        range_max: scan.range_max as f32,
+        ranges: scan.ranges.clone(),
+        ..Default::default()
+    }
+}
+
 /// The `cstep_msgs/Empowerment` for an estimate made with safety coefficient `c`.
 pub fn empowerment_message(header: Header, estimate: &Estimate, c: f64) -> Empowerment {
     Empowerment {

@@ -32,10 +32,10 @@ use crate::config::{load_all, NodeSettings, DEFAULT_NODE_NAME};
 use crate::estimator::Estimator;
 use crate::reward::{empowered_reward, task_reward};
 
-/// Runs `cstep node` until Ctrl-C: loads the parameters files and `--ros-args`, joins the
+/// Runs the node until `stop` is set: loads the parameters files and `--ros-args`, joins the
 /// DDS domain `ROS_DOMAIN_ID` (localhost only when `ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST`),
 /// and serves.
-pub fn run(config: &[PathBuf], ros_args: &RosArgs) -> Result<(), String> {
+pub fn run(config: &[PathBuf], ros_args: &RosArgs, stop: Arc<AtomicBool>) -> Result<(), String> {
     let node_name = ros_args.node_name.as_deref().unwrap_or(DEFAULT_NODE_NAME);
     let paths: Vec<&std::path::Path> = config
         .iter()
@@ -52,7 +52,7 @@ pub fn run(config: &[PathBuf], ros_args: &RosArgs) -> Result<(), String> {
         latest: Mutex::default(),
         mailbox: Mutex::new(None),
         arrived: Condvar::new(),
-        stopping: AtomicBool::new(false),
+        stopping: stop,
     });
 
     let context = dds_context()?;
@@ -75,13 +75,6 @@ pub fn run(config: &[PathBuf], ros_args: &RosArgs) -> Result<(), String> {
         ros_args.remap(&interface.reward_topic),
         ros_args.remap(&interface.evaluate_service),
     );
-
-    let stop = shared.clone();
-    ctrlc::set_handler(move || {
-        stop.stopping.store(true, Ordering::SeqCst);
-        stop.arrived.notify_all();
-    })
-    .map_err(|e| format!("cannot install the Ctrl-C handler: {e}"))?;
 
     let worker = {
         let shared = shared.clone();
@@ -110,7 +103,7 @@ struct Shared {
     /// The newest scan not yet scored.
     mailbox: Mutex<Option<(LaserScan, Instant)>>,
     arrived: Condvar,
-    stopping: AtomicBool,
+    stopping: Arc<AtomicBool>,
 }
 
 /// Newest inputs and running counts, for scoring and diagnostics.
@@ -224,7 +217,7 @@ impl Ports {
 
 /// The absolute form of a topic or service name: relative names live in the node's namespace.
 /// (ros2-client's own resolution writes `rt//scan` for the root namespace.)
-fn resolve(namespace: &str, name: &str) -> String {
+pub fn resolve(namespace: &str, name: &str) -> String {
     if name.starts_with('/') {
         name.to_owned()
     } else {
@@ -239,7 +232,7 @@ fn failed<E: std::fmt::Debug>(what: &'static str) -> impl FnOnce(E) -> String {
 
 /// A DDS context for `ROS_DOMAIN_ID`, localhost-only when the ROS variables ask for it
 /// (ros2-client reads neither by itself).
-fn dds_context() -> Result<Context, String> {
+pub fn dds_context() -> Result<Context, String> {
     let domain = match std::env::var("ROS_DOMAIN_ID") {
         Ok(text) if !text.trim().is_empty() => text
             .trim()
@@ -369,10 +362,12 @@ fn score_scans(
                 if let Some(next) = mailbox.take() {
                     break next;
                 }
+                // Wakes for each scan, and at least every 100 ms to notice a stop.
                 mailbox = shared
                     .arrived
-                    .wait(mailbox)
-                    .unwrap_or_else(|e| e.into_inner());
+                    .wait_timeout(mailbox, Duration::from_millis(100))
+                    .unwrap_or_else(|e| e.into_inner())
+                    .0;
             }
         };
         let Some((odom, seen)) = shared.latest().odom.clone() else {

@@ -1,0 +1,258 @@
+//! `cstep demo`: the node and a simulated drone flying the paper's arena, over real DDS on
+//! localhost, with a live table, a summary and an SVG plot.
+
+use std::collections::HashMap;
+use std::path::PathBuf;
+use std::sync::atomic::Ordering;
+use std::time::{Duration, Instant};
+
+use nalgebra::UnitQuaternion;
+use ros2_client::qos::{Durability, History, WhenFull};
+use ros2_client::{MessageTypeName, Name, NodeName, NodeOptions, QosProfile};
+
+use cstep::arena::{Arena, Flight};
+use cstep::plot::{flight_svg, FlightSample};
+use cstep::ros::args::RosArgs;
+use cstep::ros::convert::scan_to_laser_scan;
+use cstep::ros::messages::{
+    EmpoweredReward, Empowerment, Header, LaserScan, Odometry, PoseStamped, Time,
+};
+use cstep::ros::node::dds_context;
+use cstep::scene::Lidar;
+
+use super::node::stop_on_ctrl_c;
+
+/// Arguments of `cstep demo`.
+#[derive(Debug, clap::Args)]
+pub struct DemoArgs {
+    /// Seconds to fly (the scripted flight takes about 6 s, then hovers at the goal).
+    #[arg(long, default_value_t = 8.0)]
+    duration: f64,
+    /// Where to write the SVG plot of empowerment along the flight.
+    #[arg(long, default_value = "out/demo.svg")]
+    plot: PathBuf,
+}
+
+/// Scans per second the simulated LiDAR publishes.
+const SCAN_RATE_HZ: f64 = 10.0;
+
+/// Runs `cstep demo`.
+pub fn run(args: DemoArgs) -> Result<(), String> {
+    if !(args.duration.is_finite() && args.duration > 0.0) {
+        return Err(format!(
+            "--duration must be a positive number of seconds, got {}",
+            args.duration
+        ));
+    }
+    // Never leave the machine; a private domain unless the user chose one.
+    std::env::set_var("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST");
+    if std::env::var_os("ROS_DOMAIN_ID").is_none() {
+        std::env::set_var("ROS_DOMAIN_ID", (1 + std::process::id() % 100).to_string());
+    }
+    if std::env::var_os("ROS_DISTRO").is_none() {
+        std::env::set_var("ROS_DISTRO", "jazzy");
+    }
+    let stop = stop_on_ctrl_c()?;
+    let node_stop = stop.clone();
+    let node =
+        std::thread::spawn(move || cstep::ros::node::run(&[], &RosArgs::default(), node_stop));
+    let flown = fly(&args, &stop);
+    stop.store(true, Ordering::SeqCst);
+    let node_result = node
+        .join()
+        .map_err(|_| "the node thread failed".to_owned())?;
+    let samples = flown?;
+    node_result?;
+    summarize(&samples);
+    if let Some(dir) = args.plot.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+    }
+    std::fs::write(
+        &args.plot,
+        flight_svg(
+            &Arena::paper(0.0),
+            &samples.iter().map(|s| s.sample).collect::<Vec<_>>(),
+        ),
+    )
+    .map_err(|e| format!("{}: cannot write the plot: {e}", args.plot.display()))?;
+    println!("plot: {}", args.plot.display());
+    if samples.is_empty() {
+        return Err("no scan was scored: the node did not answer".into());
+    }
+    Ok(())
+}
+
+/// A scored scan with its round-trip latency.
+struct Scored {
+    sample: FlightSample,
+    latency: Duration,
+    valid: bool,
+}
+
+/// Flies the drone: publishes odometry and scans at 10 Hz and collects the node's answers.
+fn fly(args: &DemoArgs, stop: &std::sync::atomic::AtomicBool) -> Result<Vec<Scored>, String> {
+    let context = dds_context()?;
+    let mut node = context
+        .new_node(
+            NodeName::new("/", "cstep_demo_drone").map_err(|e| format!("{e:?}"))?,
+            NodeOptions::new().enable_rosout(false),
+        )
+        .map_err(|e| format!("cannot create the demo drone node: {e:?}"))?;
+    let reliable = QosProfile::publisher_default()
+        .reliability_reliable(WhenFull::Wait(Duration::from_millis(10)))
+        .durability(Durability::Volatile)
+        .history(History::KeepLast { depth: 50 });
+    let topic = |name: &str, package: &str, kind: &str| {
+        node.create_topic(
+            &Name::parse(name).map_err(|e| format!("{e:?}"))?,
+            MessageTypeName::new(package, kind),
+            &reliable,
+        )
+        .map_err(|e| format!("topic {name}: {e:?}"))
+    };
+    let odom_topic = topic("/odom", "nav_msgs", "Odometry")?;
+    let scan_topic = topic("/scan", "sensor_msgs", "LaserScan")?;
+    let empowerment_topic = topic("/cstep/empowerment", "cstep_msgs", "Empowerment")?;
+    let reward_topic = topic("/cstep/reward", "cstep_msgs", "EmpoweredReward")?;
+    let goal_topic = topic("/goal_pose", "geometry_msgs", "PoseStamped")?;
+    let fail = |e| format!("demo drone: {e:?}");
+    let odom_pub = node
+        .create_publisher::<Odometry>(&odom_topic, None)
+        .map_err(fail)?;
+    let scan_pub = node
+        .create_publisher::<LaserScan>(&scan_topic, None)
+        .map_err(fail)?;
+    let goal_pub = node
+        .create_publisher::<PoseStamped>(&goal_topic, None)
+        .map_err(fail)?;
+    let empowerment_sub = node
+        .create_subscription::<Empowerment>(&empowerment_topic, None)
+        .map_err(fail)?;
+    let reward_sub = node
+        .create_subscription::<EmpoweredReward>(&reward_topic, None)
+        .map_err(fail)?;
+
+    let executor = smol::LocalExecutor::new();
+    executor
+        .spawn(node.spinner().map_err(fail)?.spin())
+        .detach();
+    smol::block_on(executor.run(async {
+        // Wait for discovery both ways rather than sleeping blindly.
+        let discovery = Instant::now();
+        while odom_pub.get_subscription_count(&node) == 0
+            || scan_pub.get_subscription_count(&node) == 0
+            || goal_pub.get_subscription_count(&node) == 0
+            || reward_sub.get_publisher_count(&node) == 0
+        {
+            if stop.load(Ordering::SeqCst) || discovery.elapsed() > Duration::from_secs(20) {
+                return Err("the node did not appear on DDS within 20 s".to_owned());
+            }
+            smol::Timer::after(Duration::from_millis(50)).await;
+        }
+        let arena = Arena::paper(0.0);
+        let flight = Flight::past_the_block();
+        println!(
+            "cstep demo: Crazyflie in the paper's arena (block centred at y = 0), {:.1} s, ROS_DOMAIN_ID {} (localhost only)",
+            args.duration,
+            std::env::var("ROS_DOMAIN_ID").unwrap_or_default()
+        );
+        println!("{:>6} {:>6} {:>6} {:>6} {:>12} {:>8} {:>10}", "t (s)", "x (m)", "y (m)", "v m/s", "empowerment", "reward", "latency");
+        let mut sent: HashMap<(i32, u32), (f64, Instant)> = HashMap::new();
+        let mut pending: HashMap<(i32, u32), Empowerment> = HashMap::new();
+        let mut scored = Vec::new();
+        let started = Instant::now();
+        let ticks = (args.duration * SCAN_RATE_HZ).floor() as usize;
+        for k in 0..=ticks + 5 {
+            if stop.load(Ordering::SeqCst) {
+                break;
+            }
+            if k <= ticks {
+                let t = k as f64 / SCAN_RATE_HZ;
+                let (p, v) = flight.at(t);
+                let stamp = Time { sec: t.floor() as i32, nanosec: ((t.fract()) * 1e9).round() as u32 };
+                let header = Header { stamp, frame_id: "odom".into() };
+                let mut odom = Odometry { header: header.clone(), child_frame_id: "base_link".into(), ..Default::default() };
+                odom.pose.pose.position.x = p.x;
+                odom.pose.pose.position.y = p.y;
+                odom.pose.pose.position.z = arena.altitude;
+                odom.twist.twist.linear.x = v.x; // level, facing +x: body frame = world frame
+                odom.twist.twist.linear.y = v.y;
+                let mut goal = PoseStamped { header: header.clone(), ..Default::default() };
+                let end = flight.position(flight.duration(), arena.altitude);
+                (goal.pose.position.x, goal.pose.position.y, goal.pose.position.z) = (end.x, end.y, end.z);
+                // Best effort: the goal only shapes the task reward.
+                let _ = goal_pub.publish(goal);
+                let scan = arena.scene.scan(p, &UnitQuaternion::identity(), &Lidar::PAPER);
+                let scan_msg = scan_to_laser_scan(&scan, Header { stamp, frame_id: "base_link".into() });
+                if odom_pub.publish(odom).is_ok() && scan_pub.publish(scan_msg).is_ok() {
+                    sent.insert((stamp.sec, stamp.nanosec), (t, Instant::now()));
+                }
+            }
+            let next = started + Duration::from_secs_f64((k + 1) as f64 / SCAN_RATE_HZ);
+            while Instant::now() < next {
+                while let Ok(Some((e, _))) = empowerment_sub.take() {
+                    pending.insert((e.header.stamp.sec, e.header.stamp.nanosec), e);
+                }
+                while let Ok(Some((r, _))) = reward_sub.take() {
+                    let key = (r.header.stamp.sec, r.header.stamp.nanosec);
+                    if let (Some(e), Some(&(t, at))) = (pending.remove(&key), sent.get(&key)) {
+                        let (p, v) = flight.at(t);
+                        let latency = at.elapsed();
+                        println!(
+                            "{t:>6.1} {:>6.2} {:>6.2} {:>6.2} {:>12.3} {:>8.3} {:>7.1} ms{}",
+                            p.x, p.y, v.norm(), e.empowerment, r.reward,
+                            latency.as_secs_f64() * 1e3,
+                            if e.valid { String::new() } else { format!("  ({})", e.status) }
+                        );
+                        scored.push(Scored {
+                            sample: FlightSample { t, x: p.x, y: p.y, empowerment: e.empowerment, reward: r.reward },
+                            latency,
+                            valid: e.valid,
+                        });
+                    }
+                }
+                smol::Timer::after(Duration::from_millis(2)).await;
+            }
+        }
+        Ok(scored)
+    }))
+}
+
+fn summarize(scored: &[Scored]) {
+    if scored.is_empty() {
+        return;
+    }
+    let n = scored.len();
+    let valid = scored.iter().filter(|s| s.valid).count();
+    let lowest = scored
+        .iter()
+        .min_by(|a, b| a.sample.empowerment.total_cmp(&b.sample.empowerment))
+        .expect("non-empty");
+    let highest = scored
+        .iter()
+        .max_by(|a, b| a.sample.empowerment.total_cmp(&b.sample.empowerment))
+        .expect("non-empty");
+    let mean = scored.iter().map(|s| s.sample.empowerment).sum::<f64>() / n as f64;
+    let mut latencies: Vec<f64> = scored
+        .iter()
+        .map(|s| s.latency.as_secs_f64() * 1e3)
+        .collect();
+    latencies.sort_by(f64::total_cmp);
+    let q = |p: f64| latencies[((n - 1) as f64 * p).round() as usize];
+    println!("---");
+    println!("scored {n} scans ({valid} valid); empowerment mean {mean:.3} nats");
+    println!(
+        "lowest {:.3} at t = {:.1} s, (x, y) = ({:.2}, {:.2}); highest {:.3} at t = {:.1} s",
+        lowest.sample.empowerment,
+        lowest.sample.t,
+        lowest.sample.x,
+        lowest.sample.y,
+        highest.sample.empowerment,
+        highest.sample.t
+    );
+    println!(
+        "scan → score latency over DDS: median {:.1} ms, p99 {:.1} ms",
+        q(0.5),
+        q(0.99)
+    );
+}

@@ -21,7 +21,7 @@ VENV_ENV := env -u PYTHONPATH -u AMENT_PREFIX_PATH -u COLCON_PREFIX_PATH \
 ROS_BUILD_ENV := $(VENV_ENV) \
 	AMENT_PREFIX_PATH=$(VENV_ABS) CMAKE_PREFIX_PATH=$(VENV_ABS) PATH=$(VENV_ABS)/bin:$$PATH
 
-.PHONY: test lint lint-rust lint-python test-rust test-python venv bench
+.PHONY: test lint lint-rust lint-python test-rust test-python venv bench bench-latency
 
 test: lint test-rust test-python
 
@@ -81,3 +81,8 @@ $(MSGS_STAMP): $(PY_STAMP) $(MSG_SOURCES) Makefile
 bench:
 	$(CARGO) run --release --quiet -- bench
 	$(CARGO) bench --bench evaluate
+
+# Scan -> score latency of the node over real DDS at 40 Hz (localhost, private domain).
+bench-latency: $(MSGS_STAMP)
+	$(CARGO) build --release --quiet
+	$(VENV_ENV) CSTEP_BIN=$(abspath $(TARGET_DIR))/release/cstep $(VPY) benches/python/bench_latency.py

@@ -14,8 +14,8 @@ use std::path::Path;
 use approx::assert_relative_eq;
 use byteorder::LittleEndian;
 use cstep::ros::messages::{
-    EmpoweredReward, Empowerment, EvaluateRequest, EvaluateResponse, Header, LaserScan, Odometry,
-    Point, Time,
+    DiagnosticArray, EmpoweredReward, Empowerment, EvaluateRequest, EvaluateResponse, Header,
+    LaserScan, Odometry, Point, PoseStamped, Time,
 };
 use serde::de::DeserializeOwned;
 use serde::Serialize;
@@ -24,7 +24,8 @@ use serde::Serialize;
 const CDR_LE: [u8; 4] = [0x00, 0x01, 0x00, 0x00];
 
 /// Every fixture file; `every_fixture_file_is_tested` keeps this list complete.
-const FIXTURES: [&str; 8] = [
+const FIXTURES: [&str; 10] = [
+    "diagnostic_array",
     "empowered_reward",
     "empowerment",
     "evaluate_request",
@@ -33,6 +34,7 @@ const FIXTURES: [&str; 8] = [
     "laser_scan",
     "laser_scan_empty",
     "odometry",
+    "pose_stamped",
 ];
 
 fn fixture_dir() -> &'static Path {
@@ -139,6 +141,34 @@ fn header_round_trips() {
     // "base_scan" + NUL is 10 bytes: a string whose length is not a multiple of 4.
     let h: Header = decode("header");
     assert_eq!(h, header(1_700_000_123, 456_789_012, "base_scan"));
+}
+
+#[test]
+fn pose_stamped_round_trips() {
+    let goal: PoseStamped = decode("pose_stamped");
+    assert_eq!(goal.header, header(7, 1, "map"));
+    let p = goal.pose.position;
+    assert_eq!((p.x, p.y, p.z), (3.9, -0.3, 1.0));
+    assert_eq!(goal.pose.orientation.w, 1.0);
+}
+
+#[test]
+fn diagnostic_array_round_trips() {
+    let d: DiagnosticArray = decode("diagnostic_array");
+    assert_eq!(d.header, header(9, 0, ""));
+    let status = &d.status[0];
+    assert_eq!(status.level, 3);
+    assert_eq!(status.name, "cstep: empowerment");
+    assert_eq!(status.message, "inputs stale: no score");
+    let values: Vec<(&str, &str)> = status
+        .values
+        .iter()
+        .map(|kv| (kv.key.as_str(), kv.value.as_str()))
+        .collect();
+    assert_eq!(
+        values,
+        [("scans_scored", "12"), ("odometry_age_s", "never")]
+    );
 }
 
 #[test]

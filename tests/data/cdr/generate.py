@@ -26,7 +26,8 @@ from pathlib import Path
 from builtin_interfaces.msg import Time
 from cstep_msgs.msg import EmpoweredReward, Empowerment
 from cstep_msgs.srv import Evaluate
-from geometry_msgs.msg import Point
+from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from geometry_msgs.msg import Point, PoseStamped
 from nav_msgs.msg import Odometry
 from rclpy.serialization import serialize_message
 from rosidl_parser.definition import (
@@ -228,6 +229,30 @@ def evaluate_response() -> Evaluate.Response:
 
 
 # File stem -> message factory. The Rust test reads the same names.
+def pose_stamped() -> PoseStamped:
+    msg = PoseStamped()
+    msg.header = Header(stamp=Time(sec=7, nanosec=1), frame_id="map")
+    msg.pose.position.x, msg.pose.position.y, msg.pose.position.z = 3.9, -0.3, 1.0
+    msg.pose.orientation.w = 1.0
+    return msg
+
+
+def diagnostic_array() -> DiagnosticArray:
+    status = DiagnosticStatus(
+        level=DiagnosticStatus.STALE,
+        name="cstep: empowerment",
+        message="inputs stale: no score",
+        hardware_id="cstep",
+        values=[
+            KeyValue(key="scans_scored", value="12"),
+            KeyValue(key="odometry_age_s", value="never"),
+        ],
+    )
+    return DiagnosticArray(
+        header=Header(stamp=Time(sec=9, nanosec=0), frame_id=""), status=[status]
+    )
+
+
 FIXTURES = {
     "header": header,
     "odometry": odometry,
@@ -237,6 +262,8 @@ FIXTURES = {
     "empowered_reward": empowered_reward,
     "evaluate_request": evaluate_request,
     "evaluate_response": evaluate_response,
+    "pose_stamped": pose_stamped,
+    "diagnostic_array": diagnostic_array,
 }
 
 

@@ -13,7 +13,7 @@ collision, time, min_obstacle_distance (centre to nearest wall or block face, m)
 from __future__ import annotations
 
 import math
-from typing import Any
+from typing import Any, ClassVar
 
 import gymnasium as gym
 import numpy as np
@@ -28,7 +28,7 @@ EPISODE_SECONDS = 30.0
 class CStepDroneEnv(gym.Env):
     """The drone arena with the plain navigation reward or the C-STEP empowered reward."""
 
-    metadata = {"render_modes": ["human"], "render_fps": CONTROL_HZ}
+    metadata: ClassVar[dict] = {"render_modes": ["human"], "render_fps": CONTROL_HZ}
 
     def __init__(
         self,
@@ -54,18 +54,18 @@ class CStepDroneEnv(gym.Env):
         self.empowered = empowered
         self.safety_coefficient = float(safety_coefficient)
         self.max_offset = max_offset
-        self.max_steps = int(round(episode_seconds * CONTROL_HZ))
+        self.max_steps = round(episode_seconds * CONTROL_HZ)
         self.success_radius = success_radius
         self.fixed_arena = arena
         self.render_mode = render_mode
         self._bridge = bridge
         self._own_bridge = None
-        self._bridge_args = dict(
-            mode=reward_mode,
-            domain_id=domain_id,
-            safety_coefficient=self.safety_coefficient,
-            timeout=reward_timeout,
-        )
+        self._bridge_args = {
+            "mode": reward_mode,
+            "domain_id": domain_id,
+            "safety_coefficient": self.safety_coefficient,
+            "timeout": reward_timeout,
+        }
         self.sim = DroneSim(arena or Arena(), gui=render_mode == "human")
         high = np.concatenate(
             [np.full(3, 10.0), np.full(3, 20.0), np.full(3, math.pi), np.full(3, 100.0)]

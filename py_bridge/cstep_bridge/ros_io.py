@@ -84,7 +84,7 @@ def private_domain_id() -> int:
 
 def stamp(t: float) -> Time:
     sec = math.floor(t)
-    return Time(sec=int(sec), nanosec=int(round((t - sec) * 1e9)) % 1_000_000_000)
+    return Time(sec=int(sec), nanosec=round((t - sec) * 1e9) % 1_000_000_000)
 
 
 def odometry_msg(state: DroneState, t: float) -> Odometry:
@@ -146,7 +146,7 @@ class CStepNode:
             ROS_DISTRO=env.get("ROS_DISTRO", "jazzy"),
         )
         env.pop("ROS_LOCALHOST_ONLY", None)
-        self.log = tempfile.NamedTemporaryFile(
+        self.log = tempfile.NamedTemporaryFile(  # noqa: SIM115 (open for the process's life)
             "w+", prefix=f"cstep-node-{domain_id}-", suffix=".log", delete=False
         )
         self.domain_id = domain_id
@@ -204,7 +204,9 @@ class RosBridge:
         self.timeout = timeout
         self.safety_coefficient = float(safety_coefficient)
         if domain_id is None:
-            domain_id = private_domain_id() if start_node else int(os.environ.get("ROS_DOMAIN_ID", 0))
+            domain_id = (
+                private_domain_id() if start_node else int(os.environ.get("ROS_DOMAIN_ID", "0"))
+            )
         self.domain_id = domain_id
         self.cstep: CStepNode | None = None
         if start_node:
@@ -226,7 +228,11 @@ class RosBridge:
         if mode == "topic":
             n.create_subscription(EmpoweredReward, "/cstep/reward", self._on_reward, RELIABLE)
         self.goal: np.ndarray | None = None
-        self._wait_ready(discovery_timeout)
+        try:
+            self._wait_ready(discovery_timeout)
+        except BaseException:
+            self.close()
+            raise
 
     def _on_reward(self, msg: EmpoweredReward) -> None:
         self.rewards[(msg.header.stamp.sec, msg.header.stamp.nanosec)] = msg

@@ -62,6 +62,10 @@ LATCHED = QoSProfile(
 )
 
 
+# Topic mode: how often to send the state again while no reward for it has come back (s).
+RESEND_S = 0.25
+
+
 class RewardTimeout(RuntimeError):
     """The node did not answer in time."""
 
@@ -216,7 +220,9 @@ class RosBridge:
         self.context = Context()
         rclpy.init(context=self.context, domain_id=domain_id)
         self.executor = SingleThreadedExecutor(context=self.context)
-        self.node = Node("cstep_bridge", context=self.context)
+        self.node = Node(
+            f"cstep_bridge_{os.getpid()}_{next(_DOMAIN_COUNTER)}", context=self.context
+        )
         self.executor.add_node(self.node)
         n = self.node
         self.odom_pub = n.create_publisher(Odometry, "odom", RELIABLE)
@@ -239,14 +245,17 @@ class RosBridge:
         if len(self.rewards) > 100:
             self.rewards.pop(next(iter(self.rewards)))
 
+    def _check_node(self, what: str) -> None:
+        if self.cstep is not None and not self.cstep.alive():
+            raise RuntimeError(
+                f"the cstep node exited ({self.cstep.proc.returncode}) while waiting for "
+                f"{what}; its log:\n{self.cstep.log_tail()}"
+            )
+
     def _spin_until(self, condition, timeout: float, what: str) -> None:
         deadline = time.monotonic() + timeout
         while not condition():
-            if self.cstep is not None and not self.cstep.alive():
-                raise RuntimeError(
-                    f"the cstep node exited ({self.cstep.proc.returncode}) while waiting for "
-                    f"{what}; its log:\n{self.cstep.log_tail()}"
-                )
+            self._check_node(what)
             if time.monotonic() > deadline:
                 raise RewardTimeout(
                     f"no {what} from the cstep node within {timeout:.1f} s "
@@ -284,8 +293,8 @@ class RosBridge:
         clock = Clock()
         clock.clock = stamp(t)
         self.clock_pub.publish(clock)
-        self.odom_pub.publish(odom)
         if self.mode == "service":
+            self.odom_pub.publish(odom)  # for other listeners; the reply rests on the request
             self.scan_pub.publish(scan)
             req = Evaluate.Request(odom=odom, scan=scan)
             if self.goal is not None:
@@ -296,12 +305,8 @@ class RosBridge:
             res = future.result()
             e, r = res.empowerment, res.reward
         else:
-            key = (scan.header.stamp.sec, scan.header.stamp.nanosec)
-            self.scan_pub.publish(scan)
-            self._spin_until(
-                lambda: key in self.rewards, self.timeout, f"/cstep/reward stamped {t:.4f} s"
-            )
-            e, r = None, self.rewards.pop(key)
+            r = self._reward_by_topic(state, odom, scan, t)
+            e = None
         if not math.isclose(r.safety_coefficient, self.safety_coefficient, rel_tol=1e-9):
             raise RuntimeError(
                 f"the cstep node uses safety_coefficient {r.safety_coefficient}, this bridge "
@@ -318,6 +323,38 @@ class RosBridge:
             empowerment_msg=e,
             reward_msg=r,
         )
+
+    def _reward_by_topic(
+        self, state: DroneState, odom: Odometry, scan: LaserScan, t: float
+    ) -> EmpoweredReward:
+        """Publish goal, odometry and scan, and wait for the reward stamped with the scan.
+
+        The scan goes best-effort and the node keeps only what arrived after its readers matched,
+        so the three are sent again every ``RESEND_S`` until a reply with this stamp *and* the
+        task reward of this goal comes back (the node's answer for a stamp is deterministic).
+        """
+        key = (scan.header.stamp.sec, scan.header.stamp.nanosec)
+        expected = 1.0
+        if self.goal is not None:
+            expected = math.exp(-float(np.linalg.norm(self.goal - state.position)))
+        deadline = time.monotonic() + self.timeout
+        while True:
+            if self.goal is not None:
+                self.set_goal(self.goal)
+            self.odom_pub.publish(odom)
+            self.scan_pub.publish(scan)
+            resend = min(time.monotonic() + RESEND_S, deadline)
+            while key not in self.rewards and time.monotonic() < resend:
+                self._check_node("a /cstep/reward")
+                self.executor.spin_once(timeout_sec=0.005)
+            r = self.rewards.pop(key, None)
+            if r is not None and math.isclose(r.task_reward, expected, rel_tol=1e-9):
+                return r
+            if time.monotonic() > deadline:
+                raise RewardTimeout(
+                    f"no /cstep/reward stamped {t:.4f} s with this goal's task reward from the "
+                    f"cstep node within {self.timeout:.1f} s (ROS_DOMAIN_ID {self.domain_id})"
+                )
 
     def close(self) -> None:
         if getattr(self, "node", None) is not None:

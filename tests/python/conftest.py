@@ -22,6 +22,8 @@ from rclpy.executors import SingleThreadedExecutor
 
 HERE = Path(__file__).resolve().parent
 REPO = HERE.parent.parent
+# py_bridge/ (the cstep_bridge package) straight from the checkout, without installing it.
+sys.path.insert(0, str(REPO / "py_bridge"))
 
 # Domains 1..100 (0 is everyone's default; Fast DDS ports stay clear of the ephemeral range
 # up to 101). Start at an offset from this process id so that two test runs on one machine

@@ -1,0 +1,156 @@
+"""Gymnasium environment of the paper's drone experiment, with the reward from a `cstep node`.
+
+Observation (192 values, float32): goal − position (3, m), world-frame velocity (3, m/s), attitude
+roll/pitch/yaw (3, rad), body angular velocity (3, rad/s), the 180 LiDAR ranges clipped to
+[0, 3] m (no return = 3 m). Action: a 2D waypoint offset in [−1, 1]² scaled to ±0.1 m, added to
+the current position at the fixed 1 m altitude and tracked by the PID for one 30 Hz control step.
+Reward: ``exp(−‖p − goal‖)`` (``empowered=False``) or the node's empowered reward
+``exp(−‖p − goal‖) · log(c · λ(R_free))`` for exactly this state. Terminates on contact or tilt
+> 0.9 rad; truncates at 30 s. ``info``: success (came within ``success_radius`` of the goal),
+collision, time, min_obstacle_distance (centre to nearest wall or block face, m).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any, ClassVar
+
+import gymnasium as gym
+import numpy as np
+from gymnasium import spaces
+
+from .sim import CONTROL_HZ, LIDAR_BEAMS, LIDAR_RANGE, Arena, DroneSim, DroneState
+
+MAX_TILT = 0.9
+EPISODE_SECONDS = 30.0
+
+
+class CStepDroneEnv(gym.Env):
+    """The drone arena with the plain navigation reward or the C-STEP empowered reward."""
+
+    metadata: ClassVar[dict] = {"render_modes": ["human"], "render_fps": CONTROL_HZ}
+
+    def __init__(
+        self,
+        empowered: bool = True,
+        safety_coefficient: float = 1.0,
+        *,
+        bridge=None,
+        reward_mode: str = "service",
+        domain_id: int | None = None,
+        max_offset: float = 0.1,
+        episode_seconds: float = EPISODE_SECONDS,
+        success_radius: float = 0.2,
+        arena: Arena | None = None,
+        render_mode: str | None = None,
+        reward_timeout: float = 5.0,
+    ) -> None:
+        """``bridge``: a :class:`~cstep_bridge.ros_io.RosBridge` to use (not closed by this env);
+        otherwise an empowered env starts its own bridge and private node on first reset.
+        ``arena``: a fixed configuration; None draws one per episode from the reset seed."""
+        super().__init__()
+        if safety_coefficient <= 0:
+            raise ValueError(f"safety_coefficient must be > 0, not {safety_coefficient}")
+        self.empowered = empowered
+        self.safety_coefficient = float(safety_coefficient)
+        self.max_offset = max_offset
+        self.max_steps = round(episode_seconds * CONTROL_HZ)
+        self.success_radius = success_radius
+        self.fixed_arena = arena
+        self.render_mode = render_mode
+        self._bridge = bridge
+        self._own_bridge = None
+        self._bridge_args = {
+            "mode": reward_mode,
+            "domain_id": domain_id,
+            "safety_coefficient": self.safety_coefficient,
+            "timeout": reward_timeout,
+        }
+        self.sim = DroneSim(arena or Arena(), gui=render_mode == "human")
+        high = np.concatenate(
+            [np.full(3, 10.0), np.full(3, 20.0), np.full(3, math.pi), np.full(3, 100.0)]
+        )
+        self.observation_space = spaces.Box(
+            low=np.concatenate([-high, np.zeros(LIDAR_BEAMS)]).astype(np.float32),
+            high=np.concatenate([high, np.full(LIDAR_BEAMS, LIDAR_RANGE)]).astype(np.float32),
+            dtype=np.float32,
+        )
+        self.action_space = spaces.Box(-1.0, 1.0, shape=(2,), dtype=np.float32)
+        self.steps = 0
+        self.success = False
+
+    # --- helpers -------------------------------------------------------------------------
+    @property
+    def bridge(self):
+        if self._bridge is None and self._own_bridge is None:
+            from .ros_io import RosBridge  # rclpy only when empowered
+
+            self._own_bridge = RosBridge(**self._bridge_args)
+        return self._bridge or self._own_bridge
+
+    def _observe(self, state: DroneState, ranges: np.ndarray) -> np.ndarray:
+        goal = self.sim.arena.goal
+        lidar = np.clip(np.where(np.isfinite(ranges), ranges, LIDAR_RANGE), 0.0, LIDAR_RANGE)
+        obs = np.concatenate(
+            [goal - state.position, state.velocity, state.rpy, state.body_angular_velocity, lidar]
+        )
+        low, high = self.observation_space.low, self.observation_space.high
+        return np.clip(obs, low, high).astype(np.float32)
+
+    def _info(self, state: DroneState, collision: bool) -> dict[str, Any]:
+        return {
+            "success": self.success,
+            "collision": collision,
+            "time": self.sim.time,
+            "min_obstacle_distance": self.sim.min_obstacle_distance(state),
+            "distance_to_goal": float(np.linalg.norm(self.sim.arena.goal - state.position)),
+        }
+
+    # --- gymnasium API -------------------------------------------------------------------
+    def reset(self, *, seed: int | None = None, options: dict | None = None):
+        super().reset(seed=seed)
+        arena = self.fixed_arena or Arena.random(self.np_random)
+        if options and "arena" in options:
+            arena = options["arena"]
+        state = self.sim.reset(arena)
+        self.steps = 0
+        self.success = False
+        if self.empowered:
+            self.bridge.set_goal(arena.goal)
+        ranges = self.sim.scan(state)
+        return self._observe(state, ranges), self._info(state, False)
+
+    def step(self, action):
+        action = np.clip(np.asarray(action, dtype=float), -1.0, 1.0)
+        before = self.sim.state()
+        waypoint = np.array(
+            [
+                before.position[0] + self.max_offset * action[0],
+                before.position[1] + self.max_offset * action[1],
+                self.sim.arena.altitude,
+            ]
+        )
+        state = self.sim.step(waypoint)
+        self.steps += 1
+        ranges = self.sim.scan(state)
+        collision = self.sim.in_collision()
+        distance = float(np.linalg.norm(self.sim.arena.goal - state.position))
+        self.success = self.success or distance < self.success_radius
+        info = self._info(state, collision)
+        if self.empowered:
+            answer = self.bridge.evaluate(state, ranges, self.sim.time)
+            reward = answer.reward
+            info["task_reward"] = answer.task_reward
+            info["empowerment"] = answer.empowerment
+            info["reward_valid"] = answer.valid
+        else:
+            reward = math.exp(-distance)
+        terminated = collision or state.tilt > MAX_TILT
+        truncated = not terminated and self.steps >= self.max_steps
+        return self._observe(state, ranges), float(reward), terminated, truncated, info
+
+    def close(self) -> None:
+        if self._own_bridge is not None:
+            self._own_bridge.close()
+            self._own_bridge = None
+        self.sim.close()

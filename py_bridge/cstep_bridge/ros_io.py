@@ -1,0 +1,367 @@
+"""rclpy bridge between the simulation and a `cstep node`.
+
+Publishes ``/odom`` (nav_msgs/Odometry, twist in the body frame as REP 105 says), ``/scan``
+(sensor_msgs/LaserScan) and ``/clock``, all stamped with simulation time, and obtains the empowered
+reward of exactly that state from the node.
+
+Two ways to get the reward:
+
+- ``mode="service"`` (default): one ``/cstep/evaluate`` call carrying the odometry, the scan and
+  the goal. The reply is computed from exactly the request — deterministic for the node's seed,
+  synchronous, no matching by stamp. The topic path cannot promise that: the node pairs each scan
+  with the *newest* odometry it has, checks odometry age against its own wall clock (a paused or
+  faster-than-real-time simulation reads as stale), keeps only the latest scan when busy, and the
+  scan travels best-effort (sensor-data QoS), so a reward can be skipped.
+- ``mode="topic"``: publish ``/odom`` then ``/scan`` and wait for the ``/cstep/reward`` message
+  whose stamp equals the scan's; the goal goes out on ``goal_pose``.
+
+Either way a missing reply raises :class:`RewardTimeout` after ``timeout`` seconds: never a silent 0.
+When no node is given, :class:`CStepNode` starts a private ``cstep node`` on its own ROS domain
+(localhost-only discovery) and kills it by its PID on close.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+import os
+import signal
+import subprocess
+import tempfile
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import rclpy
+from builtin_interfaces.msg import Time
+from cstep_msgs.msg import EmpoweredReward, Empowerment
+from cstep_msgs.srv import Evaluate
+from geometry_msgs.msg import PoseStamped
+from nav_msgs.msg import Odometry
+from rclpy.context import Context
+from rclpy.executors import SingleThreadedExecutor
+from rclpy.node import Node
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
+from rosgraph_msgs.msg import Clock
+from sensor_msgs.msg import LaserScan
+
+from .sim import (
+    LIDAR_ANGLE_INCREMENT,
+    LIDAR_ANGLE_MIN,
+    LIDAR_RANGE,
+    LIDAR_RANGE_MIN,
+    DroneState,
+)
+
+REPO = Path(__file__).resolve().parents[2]
+DEFAULT_CONFIG = REPO / "config" / "cstep.yaml"
+RELIABLE = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
+LATCHED = QoSProfile(
+    depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL
+)
+
+
+# Topic mode: how often to send the state again while no reward for it has come back (s).
+RESEND_S = 0.25
+
+
+class RewardTimeout(RuntimeError):
+    """The node did not answer in time."""
+
+
+def cstep_binary() -> Path:
+    """The `cstep` executable: $CSTEP_BIN, else the release build ($CARGO_TARGET_DIR or target/)."""
+    if "CSTEP_BIN" in os.environ:
+        return Path(os.environ["CSTEP_BIN"])
+    target = Path(os.environ.get("CARGO_TARGET_DIR", REPO / "target"))
+    return target / "release" / "cstep"
+
+
+_DOMAIN_COUNTER = itertools.count()
+
+
+def private_domain_id() -> int:
+    """A domain id in 1..100 unlikely to be shared: offset by this process id, then counted up."""
+    return 1 + (os.getpid() + 37 * next(_DOMAIN_COUNTER)) % 100
+
+
+def stamp(t: float) -> Time:
+    sec = math.floor(t)
+    return Time(sec=int(sec), nanosec=round((t - sec) * 1e9) % 1_000_000_000)
+
+
+def odometry_msg(state: DroneState, t: float) -> Odometry:
+    """Odometry of ``state``: pose in ``odom``, twist in the body frame ``base_link`` (REP 105)."""
+    m = Odometry()
+    m.header.stamp = stamp(t)
+    m.header.frame_id = "odom"
+    m.child_frame_id = "base_link"
+    pos, q = state.position, state.quaternion
+    m.pose.pose.position.x, m.pose.pose.position.y, m.pose.pose.position.z = map(float, pos)
+    o = m.pose.pose.orientation
+    o.x, o.y, o.z, o.w = map(float, q)
+    v, w = state.body_velocity, state.body_angular_velocity
+    lin, ang = m.twist.twist.linear, m.twist.twist.angular
+    lin.x, lin.y, lin.z = map(float, v)
+    ang.x, ang.y, ang.z = map(float, w)
+    return m
+
+
+def scan_msg(ranges: np.ndarray, t: float) -> LaserScan:
+    """The LiDAR ranges as a LaserScan in ``base_link`` (+inf = no return, REP 117)."""
+    m = LaserScan()
+    m.header.stamp = stamp(t)
+    m.header.frame_id = "base_link"
+    m.angle_min = LIDAR_ANGLE_MIN
+    m.angle_increment = LIDAR_ANGLE_INCREMENT
+    m.angle_max = LIDAR_ANGLE_MIN + (len(ranges) - 1) * LIDAR_ANGLE_INCREMENT
+    m.range_min = LIDAR_RANGE_MIN
+    m.range_max = LIDAR_RANGE
+    m.ranges = [float(r) for r in ranges]
+    return m
+
+
+class CStepNode:
+    """A private `cstep node` process on ``domain_id``, localhost only; killed by PID on close."""
+
+    def __init__(
+        self,
+        domain_id: int,
+        safety_coefficient: float = 1.0,
+        config: Path | str = DEFAULT_CONFIG,
+        binary: Path | str | None = None,
+        extra_params: dict[str, str] | None = None,
+    ) -> None:
+        binary = Path(binary) if binary else cstep_binary()
+        if not binary.exists():
+            raise FileNotFoundError(
+                f"cstep binary not found at {binary}: build it (cargo build --release) "
+                "or set CSTEP_BIN"
+            )
+        params = {"safety_coefficient": repr(float(safety_coefficient)), **(extra_params or {})}
+        args = [str(binary), "node", "--config", str(config), "--ros-args"]
+        for k, v in params.items():
+            args += ["-p", f"{k}:={v}"]
+        env = dict(os.environ)
+        env.update(
+            ROS_DOMAIN_ID=str(domain_id),
+            ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST",
+            ROS_DISTRO=env.get("ROS_DISTRO", "jazzy"),
+        )
+        env.pop("ROS_LOCALHOST_ONLY", None)
+        self.log = tempfile.NamedTemporaryFile(  # noqa: SIM115 (open for the process's life)
+            "w+", prefix=f"cstep-node-{domain_id}-", suffix=".log", delete=False
+        )
+        self.domain_id = domain_id
+        self.proc = subprocess.Popen(args, stdout=self.log, stderr=subprocess.STDOUT, env=env)
+
+    def log_tail(self, lines: int = 20) -> str:
+        return "\n".join(Path(self.log.name).read_text().splitlines()[-lines:])
+
+    def alive(self) -> bool:
+        return self.proc.poll() is None
+
+    def close(self) -> None:
+        if self.proc.poll() is None:
+            self.proc.send_signal(signal.SIGINT)  # this PID only
+            try:
+                self.proc.wait(timeout=5)
+            except subprocess.TimeoutExpired:
+                self.proc.kill()
+                self.proc.wait(timeout=5)
+        self.log.close()
+
+
+@dataclass
+class Reward:
+    """The node's answer for one state."""
+
+    reward: float
+    task_reward: float
+    empowerment: float
+    valid: bool
+    status: str
+    empowerment_msg: Empowerment | None
+    reward_msg: EmpoweredReward
+
+
+class RosBridge:
+    """rclpy side: publishes the simulation's odometry, scan and clock and fetches rewards.
+
+    ``domain_id=None`` with ``start_node=True`` picks a private domain and starts a node on it.
+    """
+
+    def __init__(
+        self,
+        mode: str = "service",
+        domain_id: int | None = None,
+        start_node: bool = True,
+        safety_coefficient: float = 1.0,
+        timeout: float = 5.0,
+        discovery_timeout: float = 30.0,
+        node_params: dict[str, str] | None = None,
+    ) -> None:
+        if mode not in ("service", "topic"):
+            raise ValueError(f"mode must be 'service' or 'topic', not {mode!r}")
+        self.mode = mode
+        self.timeout = timeout
+        self.safety_coefficient = float(safety_coefficient)
+        if domain_id is None:
+            domain_id = (
+                private_domain_id() if start_node else int(os.environ.get("ROS_DOMAIN_ID", "0"))
+            )
+        self.domain_id = domain_id
+        self.cstep: CStepNode | None = None
+        if start_node:
+            self.cstep = CStepNode(domain_id, safety_coefficient, extra_params=node_params)
+        # Localhost-only discovery for this process's participant too (read by rmw at init).
+        os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
+        self.context = Context()
+        rclpy.init(context=self.context, domain_id=domain_id)
+        self.executor = SingleThreadedExecutor(context=self.context)
+        self.node = Node(
+            f"cstep_bridge_{os.getpid()}_{next(_DOMAIN_COUNTER)}", context=self.context
+        )
+        self.executor.add_node(self.node)
+        n = self.node
+        self.odom_pub = n.create_publisher(Odometry, "odom", RELIABLE)
+        self.scan_pub = n.create_publisher(LaserScan, "scan", qos_profile_sensor_data)
+        self.clock_pub = n.create_publisher(Clock, "/clock", RELIABLE)
+        self.goal_pub = n.create_publisher(PoseStamped, "goal_pose", LATCHED)
+        self.client = n.create_client(Evaluate, "/cstep/evaluate")
+        self.rewards: dict[tuple[int, int], EmpoweredReward] = {}
+        if mode == "topic":
+            n.create_subscription(EmpoweredReward, "/cstep/reward", self._on_reward, RELIABLE)
+        self.goal: np.ndarray | None = None
+        try:
+            self._wait_ready(discovery_timeout)
+        except BaseException:
+            self.close()
+            raise
+
+    def _on_reward(self, msg: EmpoweredReward) -> None:
+        self.rewards[(msg.header.stamp.sec, msg.header.stamp.nanosec)] = msg
+        if len(self.rewards) > 100:
+            self.rewards.pop(next(iter(self.rewards)))
+
+    def _check_node(self, what: str) -> None:
+        if self.cstep is not None and not self.cstep.alive():
+            raise RuntimeError(
+                f"the cstep node exited ({self.cstep.proc.returncode}) while waiting for "
+                f"{what}; its log:\n{self.cstep.log_tail()}"
+            )
+
+    def _spin_until(self, condition, timeout: float, what: str) -> None:
+        deadline = time.monotonic() + timeout
+        while not condition():
+            self._check_node(what)
+            if time.monotonic() > deadline:
+                raise RewardTimeout(
+                    f"no {what} from the cstep node within {timeout:.1f} s "
+                    f"(ROS_DOMAIN_ID {self.domain_id}, mode {self.mode!r}); is a `cstep node` "
+                    "running on this domain with localhost discovery?"
+                )
+            self.executor.spin_once(timeout_sec=0.005)
+
+    def _wait_ready(self, timeout: float) -> None:
+        if self.mode == "service":
+            self._spin_until(self.client.service_is_ready, timeout, "/cstep/evaluate service")
+        else:
+            self._spin_until(
+                lambda: (
+                    self.scan_pub.get_subscription_count() >= 1
+                    and self.odom_pub.get_subscription_count() >= 1
+                    and self.node.count_publishers("/cstep/reward") >= 1
+                ),
+                timeout,
+                "matching odom/scan subscriptions and /cstep/reward publisher",
+            )
+
+    def set_goal(self, goal: np.ndarray) -> None:
+        self.goal = np.asarray(goal, dtype=float)
+        if self.mode == "topic":
+            m = PoseStamped()
+            m.header.frame_id = "odom"
+            m.pose.position.x, m.pose.position.y, m.pose.position.z = map(float, self.goal)
+            m.pose.orientation.w = 1.0
+            self.goal_pub.publish(m)
+
+    def evaluate(self, state: DroneState, ranges: np.ndarray, t: float) -> Reward:
+        """Publish odometry, scan and clock at sim time ``t``; the node's reward for that state."""
+        odom, scan = odometry_msg(state, t), scan_msg(ranges, t)
+        clock = Clock()
+        clock.clock = stamp(t)
+        self.clock_pub.publish(clock)
+        if self.mode == "service":
+            self.odom_pub.publish(odom)  # for other listeners; the reply rests on the request
+            self.scan_pub.publish(scan)
+            req = Evaluate.Request(odom=odom, scan=scan)
+            if self.goal is not None:
+                req.goal.x, req.goal.y, req.goal.z = map(float, self.goal)
+                req.has_goal = True
+            future = self.client.call_async(req)
+            self._spin_until(future.done, self.timeout, "/cstep/evaluate reply")
+            res = future.result()
+            e, r = res.empowerment, res.reward
+        else:
+            r = self._reward_by_topic(state, odom, scan, t)
+            e = None
+        if not math.isclose(r.safety_coefficient, self.safety_coefficient, rel_tol=1e-9):
+            raise RuntimeError(
+                f"the cstep node uses safety_coefficient {r.safety_coefficient}, this bridge "
+                f"expects {self.safety_coefficient}"
+            )
+        if not math.isfinite(r.reward):
+            raise RuntimeError(f"the cstep node sent a non-finite reward {r.reward}")
+        return Reward(
+            reward=r.reward,
+            task_reward=r.task_reward,
+            empowerment=e.empowerment if e is not None else float("nan"),
+            valid=r.valid,
+            status=e.status if e is not None else ("ok" if r.valid else "invalid"),
+            empowerment_msg=e,
+            reward_msg=r,
+        )
+
+    def _reward_by_topic(
+        self, state: DroneState, odom: Odometry, scan: LaserScan, t: float
+    ) -> EmpoweredReward:
+        """Publish goal, odometry and scan, and wait for the reward stamped with the scan.
+
+        The scan goes best-effort and the node keeps only what arrived after its readers matched,
+        so the three are sent again every ``RESEND_S`` until a reply with this stamp *and* the
+        task reward of this goal comes back (the node's answer for a stamp is deterministic).
+        """
+        key = (scan.header.stamp.sec, scan.header.stamp.nanosec)
+        expected = 1.0
+        if self.goal is not None:
+            expected = math.exp(-float(np.linalg.norm(self.goal - state.position)))
+        deadline = time.monotonic() + self.timeout
+        while True:
+            if self.goal is not None:
+                self.set_goal(self.goal)
+            self.odom_pub.publish(odom)
+            self.scan_pub.publish(scan)
+            resend = min(time.monotonic() + RESEND_S, deadline)
+            while key not in self.rewards and time.monotonic() < resend:
+                self._check_node("a /cstep/reward")
+                self.executor.spin_once(timeout_sec=0.005)
+            r = self.rewards.pop(key, None)
+            if r is not None and math.isclose(r.task_reward, expected, rel_tol=1e-9):
+                return r
+            if time.monotonic() > deadline:
+                raise RewardTimeout(
+                    f"no /cstep/reward stamped {t:.4f} s with this goal's task reward from the "
+                    f"cstep node within {self.timeout:.1f} s (ROS_DOMAIN_ID {self.domain_id})"
+                )
+
+    def close(self) -> None:
+        if getattr(self, "node", None) is not None:
+            self.node.destroy_node()
+            self.node = None
+            self.executor.shutdown()
+            self.context.try_shutdown()
+        if self.cstep is not None:
+            self.cstep.close()
+            self.cstep = None

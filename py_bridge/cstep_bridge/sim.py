@@ -1,0 +1,352 @@
+"""PyBullet world of the paper's drone experiment: arena, obstacle block, Crazyflie, 2D LiDAR, PID.
+
+Geometry as the authors' prototype codes it (see ``src/arena.rs``): the inner area is
+x ∈ [−0.5, 4.5], y ∈ [−1.75, 0.75], z ∈ [0, 2]; a 2 m × 1 m block spans x ∈ [0.5, 2.5] with its
+centre at ``block_y`` ~ U(−1, 0.3); start x ~ U(−0.3, 0), goal x ~ U(2.7, 4.2), both with
+y ~ U(−1.6, 0.4), at 1 m altitude.
+
+The drone is ``urdf/cf2x.urdf``. Each physics step (240 Hz) applies the thrust kf·ω² of every rotor
+at its position and the yaw reaction torque km·(ω0² − ω1² + ω2² − ω3²) (rotors 0 and 2 clockwise),
+with ω in rpm, clamped to the URDF's maximum. The waypoint controller is cascaded: the position
+loop runs at the 30 Hz control rate (every 8 physics steps) and sets collective thrust and desired
+attitude; the attitude loop runs every physics step, as a real flight controller's inner loop does
+(a 30 Hz attitude loop cannot hold a 27 g airframe), and the mixer turns both into rotor speeds.
+"""
+
+from __future__ import annotations
+
+import math
+import xml.etree.ElementTree as ET
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import pybullet as p
+
+REPO = Path(__file__).resolve().parents[2]
+DEFAULT_URDF = REPO / "urdf" / "cf2x.urdf"
+
+G = 9.8
+PHYSICS_HZ = 240
+CONTROL_HZ = 30
+STEPS_PER_CONTROL = PHYSICS_HZ // CONTROL_HZ  # 8
+
+# The LiDAR of the paper: 180 beams over 360°, 3 m range.
+LIDAR_BEAMS = 180
+LIDAR_RANGE = 3.0
+LIDAR_RANGE_MIN = 0.02
+LIDAR_ANGLE_MIN = -math.pi
+LIDAR_ANGLE_INCREMENT = 2 * math.pi / LIDAR_BEAMS
+
+
+@dataclass(frozen=True)
+class DroneParams:
+    """What the controller and the motor model need, read from the URDF."""
+
+    mass: float
+    inertia: tuple[float, float, float]
+    kf: float
+    km: float
+    arm: float
+    thrust2weight: float
+    radius: float
+    rotors: tuple[tuple[float, float, float], ...]
+
+    @property
+    def max_rpm(self) -> float:
+        return math.sqrt(self.thrust2weight * self.mass * G / (4 * self.kf))
+
+    @property
+    def hover_rpm(self) -> float:
+        return math.sqrt(self.mass * G / (4 * self.kf))
+
+    @classmethod
+    def from_urdf(cls, path: Path | str = DEFAULT_URDF) -> DroneParams:
+        root = ET.parse(path).getroot()
+        props = root.find("properties")
+        if props is None:
+            raise ValueError(f"{path}: no <properties> element (kf, km, arm, thrust2weight)")
+        body = root.find("link[@name='body']")
+        inertial = body.find("inertial")
+        mass = float(inertial.find("mass").get("value"))
+        ine = inertial.find("inertia")
+        cyl = body.find("collision/geometry/cylinder")
+        rotors = []
+        for i in range(4):
+            joint = root.find(f"joint[@name='body_to_rotor{i}']")
+            xyz = tuple(float(v) for v in joint.find("origin").get("xyz").split())
+            rotors.append(xyz)
+        return cls(
+            mass=mass,
+            inertia=(float(ine.get("ixx")), float(ine.get("iyy")), float(ine.get("izz"))),
+            kf=float(props.get("kf")),
+            km=float(props.get("km")),
+            arm=float(props.get("arm")),
+            thrust2weight=float(props.get("thrust2weight")),
+            radius=float(cyl.get("radius")) if cyl is not None else float(props.get("arm")),
+            rotors=tuple(rotors),
+        )
+
+
+@dataclass
+class Arena:
+    """The arena of the drone experiment (metres, world frame)."""
+
+    block_y: float = 0.0
+    bounds: tuple[float, float, float, float] = (-0.5, -1.75, 4.5, 0.75)
+    block_x: tuple[float, float] = (0.5, 2.5)
+    block_width: float = 1.0
+    height: float = 2.0
+    altitude: float = 1.0
+    start: np.ndarray = field(default_factory=lambda: np.array([-0.15, -0.6, 1.0]))
+    goal: np.ndarray = field(default_factory=lambda: np.array([3.5, -0.6, 1.0]))
+
+    @property
+    def block(self) -> tuple[float, float, float, float]:
+        h = self.block_width / 2
+        return (self.block_x[0], self.block_y - h, self.block_x[1], self.block_y + h)
+
+    @classmethod
+    def random(cls, rng: np.random.Generator) -> Arena:
+        """One configuration drawn as the prototype draws it."""
+        block_y = rng.uniform(-1.0, 0.3)
+        start = np.array([rng.uniform(-0.3, 0.0), rng.uniform(-1.6, 0.4), 1.0])
+        goal = np.array([rng.uniform(2.7, 4.2), rng.uniform(-1.6, 0.4), 1.0])
+        return cls(block_y=block_y, start=start, goal=goal)
+
+    def clearance(self, xy: np.ndarray) -> float:
+        """Distance (m) from a point to the nearest wall or block face, 2D (negative inside)."""
+        x, y = float(xy[0]), float(xy[1])
+        x0, y0, x1, y1 = self.bounds
+        walls = min(x - x0, x1 - x, y - y0, y1 - y)
+        bx0, by0, bx1, by1 = self.block
+        dx, dy = max(bx0 - x, 0.0, x - bx1), max(by0 - y, 0.0, y - by1)
+        if dx == 0.0 and dy == 0.0:
+            block = -min(x - bx0, bx1 - x, y - by0, by1 - y)
+        else:
+            block = math.hypot(dx, dy)
+        return min(walls, block)
+
+
+@dataclass
+class DroneState:
+    """Kinematic state, world frame unless named body."""
+
+    position: np.ndarray
+    quaternion: np.ndarray  # x, y, z, w (PyBullet and ROS order)
+    velocity: np.ndarray
+    angular_velocity: np.ndarray
+    rotation: np.ndarray  # body → world
+
+    @property
+    def rpy(self) -> np.ndarray:
+        return np.array(p.getEulerFromQuaternion(self.quaternion))
+
+    @property
+    def body_velocity(self) -> np.ndarray:
+        return self.rotation.T @ self.velocity
+
+    @property
+    def body_angular_velocity(self) -> np.ndarray:
+        return self.rotation.T @ self.angular_velocity
+
+    @property
+    def tilt(self) -> float:
+        """Angle (rad) between the body z axis and the vertical."""
+        return float(math.acos(max(-1.0, min(1.0, self.rotation[2, 2]))))
+
+
+class PIDController:
+    """Cascaded waypoint controller: position PID (30 Hz) → thrust + attitude PD (240 Hz) → rpm."""
+
+    def __init__(self, params: DroneParams) -> None:
+        self.params = params
+        # Horizontal: ω_n ≈ 3.5 rad/s, ζ = 0.5; a waypoint held 0.1 m ahead (the largest action)
+        # settles at kp/kd · 0.1 m ≈ 0.34 m/s.
+        self.kp = np.array([12.0, 12.0, 10.0])
+        self.kd = np.array([3.5, 3.5, 6.0])
+        self.ki = np.array([0.5, 0.5, 2.0])
+        self.max_tilt = 0.5  # rad, commanded
+        wn, zeta = 25.0, 0.8
+        inertia = np.array(params.inertia)
+        self.k_att = inertia * wn**2
+        self.k_rate = inertia * 2 * zeta * wn
+        self.reset()
+
+    def reset(self) -> None:
+        self.integral = np.zeros(3)
+        self.thrust = self.params.mass * G
+        self.r_des = np.eye(3)
+
+    def position_loop(self, state: DroneState, target: np.ndarray, dt: float) -> None:
+        """Sets collective thrust and desired attitude (yaw 0) for the waypoint ``target``."""
+        err = target - state.position
+        self.integral = np.clip(self.integral + err * dt, -0.5, 0.5)
+        acc = self.kp * err - self.kd * state.velocity + self.ki * self.integral
+        horiz = np.linalg.norm(acc[:2])
+        limit = G * math.tan(self.max_tilt)
+        if horiz > limit:
+            acc[:2] *= limit / horiz
+        acc[2] = max(acc[2] + G, 0.2 * G)
+        force = self.params.mass * acc
+        z_b = force / np.linalg.norm(force)
+        x_c = np.array([1.0, 0.0, 0.0])
+        y_b = np.cross(z_b, x_c)
+        y_b /= np.linalg.norm(y_b)
+        x_b = np.cross(y_b, z_b)
+        self.r_des = np.column_stack([x_b, y_b, z_b])
+        self.thrust = float(force @ state.rotation[:, 2])
+
+    def rotor_rpm(self, state: DroneState) -> np.ndarray:
+        """Attitude loop and mixer: rotor speeds (rpm) for the current setpoint."""
+        r, rd = state.rotation, self.r_des
+        e = 0.5 * (rd.T @ r - r.T @ rd)
+        e_r = np.array([e[2, 1], e[0, 2], e[1, 0]])
+        torque = -self.k_att * e_r - self.k_rate * state.body_angular_velocity
+        pr = self.params
+        d = abs(pr.rotors[0][0])  # rotor offset along x and y
+        a, b = torque[0] / d, torque[1] / d
+        c = torque[2] * pr.kf / pr.km
+        t = self.thrust
+        forces = np.array([t - a - b + c, t - a + b - c, t + a + b + c, t + a - b - c]) / 4
+        rpm = np.sqrt(np.clip(forces, 0.0, None) / pr.kf)
+        return np.minimum(rpm, pr.max_rpm)
+
+
+class DroneSim:
+    """The drone in the arena. ``step(waypoint)`` advances one 30 Hz control step."""
+
+    def __init__(
+        self,
+        arena: Arena | None = None,
+        gui: bool = False,
+        urdf: Path | str = DEFAULT_URDF,
+    ) -> None:
+        self.params = DroneParams.from_urdf(urdf)
+        self.urdf = str(urdf)
+        self.client = p.connect(p.GUI if gui else p.DIRECT)
+        self.controller = PIDController(self.params)
+        self.arena = arena or Arena()
+        self.obstacles: list[int] = []
+        self.static: list[int] = []
+        self.drone = -1
+        self.rpm = np.zeros(4)
+        self.physics_steps = 0
+        self.reset(self.arena)
+
+    # --- world ---------------------------------------------------------------------------
+    def _box(self, lo: tuple[float, ...], hi: tuple[float, ...], rgba=(0.6, 0.6, 0.65, 1)) -> int:
+        half = [(h - lo_) / 2 for lo_, h in zip(lo, hi, strict=True)]
+        centre = [(h + lo_) / 2 for lo_, h in zip(lo, hi, strict=True)]
+        cid = self.client
+        col = p.createCollisionShape(p.GEOM_BOX, halfExtents=half, physicsClientId=cid)
+        vis = p.createVisualShape(p.GEOM_BOX, halfExtents=half, rgbaColor=rgba, physicsClientId=cid)
+        return p.createMultiBody(0, col, vis, centre, physicsClientId=cid)
+
+    def reset(self, arena: Arena | None = None) -> DroneState:
+        """Rebuild the world for ``arena`` and put the drone at rest at its start."""
+        if arena is not None:
+            self.arena = arena
+        cid = self.client
+        p.resetSimulation(physicsClientId=cid)
+        p.setGravity(0, 0, -G, physicsClientId=cid)
+        p.setTimeStep(1.0 / PHYSICS_HZ, physicsClientId=cid)
+        a = self.arena
+        x0, y0, x1, y1 = a.bounds
+        t, h = 0.1, a.height
+        floor = self._box((x0 - t, y0 - t, -t), (x1 + t, y1 + t, 0.0), (0.8, 0.8, 0.8, 1))
+        ceiling = self._box((x0 - t, y0 - t, h), (x1 + t, y1 + t, h + t), (0.8, 0.8, 0.8, 0.1))
+        walls = [
+            self._box((x0 - t, y0 - t, 0), (x0, y1 + t, h)),
+            self._box((x1, y0 - t, 0), (x1 + t, y1 + t, h)),
+            self._box((x0, y0 - t, 0), (x1, y0, h)),
+            self._box((x0, y1, 0), (x1, y1 + t, h)),
+        ]
+        bx0, by0, bx1, by1 = a.block
+        block = self._box((bx0, by0, 0), (bx1, by1, h), (0.8, 0.3, 0.2, 1))
+        self.static = [floor, ceiling]
+        self.obstacles = [*walls, block]
+        self.block_id = block
+        self.drone = p.loadURDF(
+            self.urdf,
+            a.start.tolist(),
+            flags=p.URDF_USE_INERTIA_FROM_FILE,
+            physicsClientId=cid,
+        )
+        self.controller.reset()
+        self.target = a.start.copy()
+        self.physics_steps = 0
+        self.rpm = np.full(4, self.params.hover_rpm)
+        return self.state()
+
+    def close(self) -> None:
+        if self.client >= 0:
+            p.disconnect(self.client)
+            self.client = -1
+
+    # --- state and sensors ---------------------------------------------------------------
+    @property
+    def time(self) -> float:
+        """Simulation time (s)."""
+        return self.physics_steps / PHYSICS_HZ
+
+    def state(self) -> DroneState:
+        pos, quat = p.getBasePositionAndOrientation(self.drone, physicsClientId=self.client)
+        vel, ang = p.getBaseVelocity(self.drone, physicsClientId=self.client)
+        rot = np.array(p.getMatrixFromQuaternion(quat)).reshape(3, 3)
+        return DroneState(np.array(pos), np.array(quat), np.array(vel), np.array(ang), rot)
+
+    def scan(self, state: DroneState | None = None) -> np.ndarray:
+        """LiDAR ranges (m) for bearings angle_min + i·increment in the body frame (yaw only:
+        a levelled 2D scanner at the drone's centre); +inf where nothing is within 3 m (REP 117).
+        """
+        s = state or self.state()
+        yaw = s.rpy[2]
+        angles = LIDAR_ANGLE_MIN + LIDAR_ANGLE_INCREMENT * np.arange(LIDAR_BEAMS) + yaw
+        dirs = np.column_stack([np.cos(angles), np.sin(angles), np.zeros(LIDAR_BEAMS)])
+        # Rays start just outside the drone's own collision shape, so they never hit it.
+        r0 = self.params.radius + 0.01
+        starts = s.position + r0 * dirs
+        ends = s.position + LIDAR_RANGE * dirs
+        hits = p.rayTestBatch(starts.tolist(), ends.tolist(), physicsClientId=self.client)
+        ranges = np.full(LIDAR_BEAMS, np.inf)
+        for i, hit in enumerate(hits):
+            if hit[0] >= 0:
+                ranges[i] = r0 + hit[2] * (LIDAR_RANGE - r0)
+        return ranges
+
+    def in_collision(self) -> bool:
+        """True when the drone touches anything (walls, block, floor, ceiling)."""
+        return bool(p.getContactPoints(bodyA=self.drone, physicsClientId=self.client))
+
+    def min_obstacle_distance(self, state: DroneState | None = None) -> float:
+        """Distance (m) from the drone's centre to the nearest wall or block face, in the plane."""
+        s = state or self.state()
+        return self.arena.clearance(s.position[:2])
+
+    # --- stepping ------------------------------------------------------------------------
+    def _apply_rotors(self, state: DroneState) -> None:
+        pr, cid = self.params, self.client
+        thrust = pr.kf * self.rpm**2
+        for i, pos in enumerate(pr.rotors):
+            p.applyExternalForce(
+                self.drone, -1, [0, 0, thrust[i]], pos, p.LINK_FRAME, physicsClientId=cid
+            )
+        w2 = self.rpm**2
+        yaw = pr.km * (w2[0] - w2[1] + w2[2] - w2[3])
+        # World frame: PyBullet's LINK_FRAME torque on a base is unreliable across versions.
+        torque = state.rotation @ np.array([0.0, 0.0, yaw])
+        p.applyExternalTorque(self.drone, -1, torque.tolist(), p.WORLD_FRAME, physicsClientId=cid)
+
+    def step(self, waypoint: np.ndarray) -> DroneState:
+        """One control step (1/30 s): track ``waypoint`` (x, y, z) for 8 physics steps."""
+        self.target = np.asarray(waypoint, dtype=float)
+        state = self.state()
+        self.controller.position_loop(state, self.target, 1.0 / CONTROL_HZ)
+        for _ in range(STEPS_PER_CONTROL):
+            self.rpm = self.controller.rotor_rpm(state)
+            self._apply_rotors(state)
+            p.stepSimulation(physicsClientId=self.client)
+            self.physics_steps += 1
+            state = self.state()
+        return state

@@ -1,0 +1,175 @@
+"""cstep_bridge: the PyBullet drone (real physics), its LiDAR, collisions, the Gymnasium env, and
+the empowered reward from a live `cstep node` over real rclpy (a private domain per test)."""
+
+import json
+import math
+import subprocess
+
+import numpy as np
+import pybullet as p
+import pytest
+from cstep_bridge.env import CStepDroneEnv
+from cstep_bridge.ros_io import RewardTimeout, RosBridge, odometry_msg, scan_msg
+from cstep_bridge.sim import LIDAR_BEAMS, Arena, DroneSim
+from gymnasium.utils.env_checker import check_env
+from test_node import CONFIG, cstep_binary, message_to_ordereddict
+
+START = np.array([-0.15, -0.6, 1.0])
+GOAL = np.array([3.5, -0.6, 1.0])
+
+
+def arena(block_y: float) -> Arena:
+    return Arena(block_y=block_y, start=START.copy(), goal=GOAL.copy())
+
+
+def beam(bearing: float) -> int:
+    """Index of the beam at body-frame ``bearing`` (rad)."""
+    return round((bearing + math.pi) / (2 * math.pi / LIDAR_BEAMS)) % LIDAR_BEAMS
+
+
+def test_urdf_properties_give_the_crazyflie_hover_and_max_rpm():
+    sim = DroneSim(arena(0.3))
+    try:
+        assert sim.params.hover_rpm == pytest.approx(14468, abs=1)
+        assert sim.params.max_rpm == pytest.approx(21703, abs=1)
+        assert sim.params.rotors[0][0] > 0 > sim.params.rotors[0][1]  # rotor 0 front-right
+    finally:
+        sim.close()
+
+
+def test_drone_hovers_near_its_start_under_zero_action_after_a_push():
+    env = CStepDroneEnv(empowered=False, arena=arena(0.3))
+    try:
+        env.reset(seed=0)
+        p.resetBaseVelocity(
+            env.sim.drone, [0.3, -0.2, 0.2], [0.5, -0.5, 0.0], physicsClientId=env.sim.client
+        )
+        for _ in range(150):  # 5 s
+            _, reward, terminated, truncated, info = env.step(np.zeros(2))
+            assert not (terminated or truncated)
+        s = env.sim.state()
+        assert np.linalg.norm(s.position - START) < 0.15, s.position
+        assert abs(s.position[2] - 1.0) < 0.02
+        assert np.linalg.norm(s.velocity) < 0.02
+        assert s.tilt < 0.01
+        assert not info["collision"]
+        assert reward == pytest.approx(math.exp(-info["distance_to_goal"]))
+        assert np.all(env.sim.rpm > 0.9 * env.sim.params.hover_rpm)
+    finally:
+        env.close()
+
+
+def test_lidar_sees_the_walls_at_the_right_range_in_the_body_frame():
+    sim = DroneSim(arena(0.3))  # block at y in [-0.2, 0.8]: nothing ahead within 3 m
+    try:
+        r = sim.scan()
+        assert r.shape == (LIDAR_BEAMS,)
+        assert r[beam(-math.pi)] == pytest.approx(0.35, abs=1e-3)  # behind: wall x = -0.5
+        assert r[beam(-math.pi / 2)] == pytest.approx(1.15, abs=1e-3)  # right: wall y = -1.75
+        assert math.isinf(r[beam(0.0)])  # ahead: far wall 4.65 m away, beyond 3 m
+        # Yawed 90° left, the body's forward beam points at the wall y = 0.75 (1.35 m away).
+        q = p.getQuaternionFromEuler([0, 0, math.pi / 2])
+        p.resetBasePositionAndOrientation(sim.drone, START.tolist(), q, physicsClientId=sim.client)
+        r = sim.scan()
+        assert r[beam(0.0)] == pytest.approx(1.35, abs=1e-3)
+        assert r[beam(math.pi / 2)] == pytest.approx(0.35, abs=1e-3)
+    finally:
+        sim.close()
+
+
+def test_flying_into_the_block_is_a_collision_that_ends_the_episode():
+    env = CStepDroneEnv(empowered=False, arena=arena(-0.6))  # the block straight ahead
+    try:
+        env.reset(seed=0)
+        for _ in range(300):
+            _, _, terminated, truncated, info = env.step(np.array([1.0, 0.0]))
+            if terminated or truncated:
+                break
+        assert terminated and info["collision"]
+        x = env.sim.state().position[0]
+        assert x == pytest.approx(0.5 - env.sim.params.radius, abs=0.02)  # block face x = 0.5
+        assert info["min_obstacle_distance"] < 0.08
+        assert 1.0 < info["time"] < 5.0  # 0.6 m at about 0.3 m/s
+    finally:
+        env.close()
+
+
+def test_check_env_on_the_unempowered_env():
+    env = CStepDroneEnv(empowered=False)
+    try:
+        check_env(env, skip_render_check=True)
+        obs, info = env.reset(seed=3)
+        assert obs.shape == env.observation_space.shape and np.all(np.isfinite(obs))
+        assert set(info) >= {"success", "collision", "time", "min_obstacle_distance"}
+    finally:
+        env.close()
+
+
+def cstep_eval(tmp_path, odom, scan, goal) -> dict:
+    (tmp_path / "odom.json").write_text(json.dumps(message_to_ordereddict(odom)))
+    s = message_to_ordereddict(scan)
+    s["ranges"] = [None if math.isinf(r) else r for r in s["ranges"]]
+    (tmp_path / "scan.json").write_text(json.dumps(s))
+    out = subprocess.run(
+        [
+            str(cstep_binary()),
+            "eval",
+            "--config",
+            str(CONFIG),
+            "--format",
+            "json",
+            "--odom",
+            str(tmp_path / "odom.json"),
+            "--scan",
+            str(tmp_path / "scan.json"),
+            "--goal",
+            ",".join(repr(float(g)) for g in goal),
+        ],
+        capture_output=True,
+        text=True,
+        check=True,
+    )
+    return json.loads(out.stdout)
+
+
+def test_empowered_env_gets_finite_rewards_matching_cstep_eval_and_the_topic_path(
+    ros_domain, tmp_path
+):
+    bridge = RosBridge(domain_id=ros_domain)  # starts its own `cstep node` on this domain
+    env = CStepDroneEnv(empowered=True, bridge=bridge, arena=arena(-0.9))
+    try:
+        env.reset(seed=0)
+        rewards = []
+        for k in range(12):
+            _, reward, terminated, _, info = env.step(np.array([1.0, 0.5 if k % 2 else -0.5]))
+            assert not terminated
+            rewards.append(reward)
+            assert info["reward_valid"]
+        assert all(math.isfinite(r) for r in rewards)
+        assert len(set(rewards)) > 1  # the state changes, so does the reward
+
+        # The same state through `cstep eval` gives the same reward.
+        state, ranges, t = env.sim.state(), env.sim.scan(), env.sim.time
+        odom, scan = odometry_msg(state, t), scan_msg(ranges, t)
+        offline = cstep_eval(tmp_path, odom, scan, GOAL)
+        assert offline["reward"] == pytest.approx(rewards[-1], abs=1e-12)
+        assert offline["task_reward"] == pytest.approx(info["task_reward"], abs=1e-12)
+        assert offline["empowerment"] == pytest.approx(info["empowerment"], abs=1e-12)
+
+        # The topic path, matched by stamp, answers the same for the same state.
+        topic = RosBridge(mode="topic", domain_id=ros_domain, start_node=False)
+        try:
+            topic.set_goal(GOAL)
+            answer = topic.evaluate(state, ranges, t)
+            assert answer.reward == pytest.approx(rewards[-1], abs=1e-12)
+        finally:
+            topic.close()
+    finally:
+        env.close()
+        bridge.close()
+    assert bridge.cstep is None  # the node was stopped
+
+
+def test_a_missing_node_is_a_clear_error_not_a_zero_reward(ros_domain):
+    with pytest.raises(RewardTimeout, match="no /cstep/evaluate service"):
+        RosBridge(domain_id=ros_domain, start_node=False, discovery_timeout=1.0)

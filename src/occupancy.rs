@@ -13,7 +13,7 @@
 //! can run at every point of every rollout.
 
 use nalgebra::{UnitQuaternion, Vector3};
-use std::f64::consts::PI;
+use std::f64::consts::{FRAC_PI_2, PI};
 
 /// A 2D LiDAR scan in the robot's body frame (the sensor sits at the body origin), with the
 /// semantics of `sensor_msgs/LaserScan` and REP 117: `+inf` = no return within range, `−inf` =
@@ -132,6 +132,15 @@ pub struct OccupancyOptions {
 /// the 1° of common scanners.
 const BINS: usize = 720;
 const BIN_WIDTH: f64 = 2.0 * PI / BINS as f64;
+/// Bins one step of a walk in [`inflate_point`] handles: a fixed-width, branch-free inner loop
+/// that compiles to SIMD.
+const LANES: usize = 8;
+/// The longest walk from a point, in bins: a disk seen from outside spans at most a half turn,
+/// a quarter on each side (`asin(r/ρ) ≤ π/2`), plus two bins of rounding, in whole steps.
+const MAX_WALK: usize = (BINS / 4 + 2).div_ceil(LANES) * LANES;
+/// Bins of padding on each side of the working table, so that walks never wrap around ±π.
+const PAD: usize = MAX_WALK + 1;
+const PADDED: usize = BINS + 2 * PAD;
 
 /// The free-space test for one scan, in the rollout frame (world-aligned, centred on the robot).
 #[derive(Debug, Clone)]
@@ -170,31 +179,38 @@ impl Occupancy {
             Beam::Invalid => unknown_limit,
         };
         let half_sector = 0.5 * scan.angle_increment.abs();
-        let mut limit = vec![f64::INFINITY; BINS];
-        let mut seen = vec![false; BINS];
+        // The working table: padded on both sides so that no walk of `inflate_point` wraps;
+        // the padding folds back onto the bins it stands for at the end. NaN marks bins no
+        // beam's sector covers.
+        let mut limit = [f32::INFINITY; PADDED];
+        let table = &mut limit[PAD..PAD + BINS];
+        table.fill(f32::NAN);
 
         // Radially, the disk's centre stays `radius` inside what each beam's sector saw.
         for beam in &beams {
-            let allowed = (visible_range(beam) - radius).max(0.0);
-            for bin in bins_overlapping(beam.bearing - half_sector, beam.bearing + half_sector) {
-                limit[bin] = limit[bin].min(allowed);
-                seen[bin] = true;
+            let allowed = (visible_range(beam) - radius).max(0.0) as f32;
+            let (first, count) =
+                bins_overlapping(beam.bearing - half_sector, beam.bearing + half_sector);
+            let (wrapped, rest) = table.split_at_mut(first);
+            let head = count.min(rest.len());
+            for l in rest[..head].iter_mut().chain(&mut wrapped[..count - head]) {
+                *l = l.min(allowed);
             }
         }
-        for (l, s) in limit.iter_mut().zip(&seen) {
-            if !s {
-                *l = unknown_limit;
-            }
+        for l in table.iter_mut().filter(|l| l.is_nan()) {
+            *l = unknown_limit as f32;
         }
 
         // Laterally, the disk must clear the surfaces the returns lie on and the corners where
         // the visible range steps down between sectors.
         let mut in_collision = false;
+        let edges = bin_edges();
         let mut inflate = |x: f64, y: f64| {
-            if x * x + y * y <= radius * radius {
+            let rho_sq = x * x + y * y;
+            if rho_sq <= radius * radius {
                 in_collision = true;
             } else {
-                inflate_point(&mut limit, x, y, radius);
+                inflate_point(&mut limit, edges, x, y, rho_sq, radius);
             }
         };
         let full_circle = (beams.len() as f64 + 1.0) * scan.angle_increment.abs() >= 2.0 * PI;
@@ -233,6 +249,13 @@ impl Occupancy {
                 }
             }
         }
+        // Fold the padding back: padded bin `p` stands for bin `(p − PAD) mod BINS`.
+        for p in 0..PAD {
+            limit[p + BINS] = limit[p + BINS].min(limit[p]);
+        }
+        for p in PAD + BINS..PADDED {
+            limit[p - BINS] = limit[p - BINS].min(limit[p]);
+        }
 
         let half_height = 0.5 * options.robot_height.max(0.0);
         let z_low = options
@@ -244,7 +267,7 @@ impl Occupancy {
         if z_low > 0.0 || z_high < 0.0 {
             in_collision = true;
         }
-        let limit_sq: Vec<f32> = limit.iter().map(|l| (l * l) as f32).collect();
+        let limit_sq: Vec<f32> = limit[PAD..PAD + BINS].iter().map(|l| l * l).collect();
         Self {
             inner_sq: limit_sq.iter().copied().fold(f32::INFINITY, f32::min),
             limit_sq,
@@ -368,54 +391,106 @@ fn same_surface(a: f64, b: f64, angle_increment: f64) -> bool {
     gap_sq <= allowed * allowed
 }
 
-/// Unit directions of the bin edges: edge `k` is the bearing `−π + k·BIN_WIDTH`.
-fn bin_edges() -> &'static [(f64, f64)] {
-    static EDGES: std::sync::OnceLock<Vec<(f64, f64)>> = std::sync::OnceLock::new();
+/// Unit directions of the bin edges of the padded table, x and y apart so that walks load
+/// them as vectors: edge `p` is the bearing `−π + (p − PAD)·BIN_WIDTH`, the lower edge of
+/// padded bin `p`.
+struct Edges {
+    x: [f32; PADDED + 1],
+    y: [f32; PADDED + 1],
+}
+
+fn bin_edges() -> &'static Edges {
+    static EDGES: std::sync::OnceLock<Edges> = std::sync::OnceLock::new();
     EDGES.get_or_init(|| {
-        (0..=BINS)
-            .map(|k| {
-                let (s, c) = (-PI + k as f64 * BIN_WIDTH).sin_cos();
-                (c, s)
-            })
-            .collect()
+        let mut edges = Edges {
+            x: [0.0; PADDED + 1],
+            y: [0.0; PADDED + 1],
+        };
+        for p in 0..=PADDED {
+            let (s, c) = (-PI + (p as f64 - PAD as f64) * BIN_WIDTH).sin_cos();
+            (edges.x[p], edges.y[p]) = (c as f32, s as f32);
+        }
+        edges
     })
 }
 
 /// Lowers the limits of the bins whose rays bring the robot's disk onto the obstacle point
-/// `(x, y)`. Along a ray of direction `u`, the disk's centre first touches the point at
-/// `t − sqrt(r² − s²)` with `t = p·u` and `s² = |p|² − t²`; within a bin the worst ray is the
-/// edge nearest the point, so each bin costs a dot product and a square root, no trigonometry.
-fn inflate_point(limit: &mut [f64], x: f64, y: f64, radius: f64) {
-    let rho_sq = x * x + y * y;
-    let r_sq = radius * radius;
-    let home = ((fast_atan2(y as f32, x as f32) as f64 + PI) / BIN_WIDTH).floor() as isize;
-    let home_bin = home.rem_euclid(BINS as isize) as usize;
-    limit[home_bin] = limit[home_bin].min((rho_sq.sqrt() - radius).max(0.0));
-    let edges = bin_edges();
-    // Walk away from the point in both directions until rays pass farther than `radius`.
-    for direction in [1isize, -1] {
-        for step in 1..BINS as isize / 2 {
-            let bin = home + direction * step;
-            // Nearest edge: the bin's left edge when walking up, its right edge when walking down.
-            let edge =
-                (if direction > 0 { bin } else { bin + 1 }).rem_euclid(BINS as isize) as usize;
-            let (ux, uy) = edges[edge];
-            let t = x * ux + y * uy;
-            let s_sq = rho_sq - t * t;
-            if t <= 0.0 || s_sq >= r_sq {
-                break;
-            }
-            let b = bin.rem_euclid(BINS as isize) as usize;
-            limit[b] = limit[b].min((t - (r_sq - s_sq).sqrt()).max(0.0));
+/// `(x, y)` (at squared distance `rho_sq > radius²`) in the padded table `limit`. Along a ray
+/// of direction `u`, the disk's centre first touches the point at `t − sqrt(r² − s²)` with
+/// `t = p·u` and `s = p × u`; within a bin the worst ray is the edge nearest the point, so each
+/// bin costs two products and a square root, no trigonometry. Rays within `asin(r/ρ)` of the
+/// point can touch it: the walks on both sides cover that bound in fixed-width steps, and
+/// rays that miss leave their bins as they are.
+fn inflate_point(
+    limit: &mut [f32; PADDED],
+    edges: &Edges,
+    x: f64,
+    y: f64,
+    rho_sq: f64,
+    radius: f64,
+) {
+    let bearing = fast_atan2(y as f32, x as f32) as f64;
+    // Between PAD − 1 and PAD + BINS, since fast_atan2 is within f32 rounding of ±π.
+    let home = ((bearing + PI) / BIN_WIDTH + PAD as f64).floor() as usize;
+    let home = home.clamp(PAD - 1, PAD + BINS);
+    limit[home] = limit[home].min((rho_sq.sqrt() - radius).max(0.0) as f32);
+    // tan(asin(r/ρ)) = r/sqrt(ρ² − r²) bounds the angle from above.
+    let spread = (radius / (rho_sq - radius * radius).sqrt()).min(FRAC_PI_2);
+    let steps = ((spread / BIN_WIDTH) as usize + 2).div_ceil(LANES) * LANES;
+    let walk = steps.min(MAX_WALK);
+    let (x, y, r) = (x as f32, y as f32, radius as f32);
+    // Walking up, a bin's nearest edge is its lower one; walking down, its upper one.
+    let up = home + 1..home + 1 + walk;
+    lower_bins(
+        &mut limit[up.clone()],
+        &edges.x[up.clone()],
+        &edges.y[up],
+        x,
+        y,
+        r,
+    );
+    let down = home - walk..home;
+    let edge = home + 1 - walk..home + 1;
+    lower_bins(
+        &mut limit[down],
+        &edges.x[edge.clone()],
+        &edges.y[edge],
+        x,
+        y,
+        r,
+    );
+}
+
+/// Lowers each bin of `limit` to where the disk, its centre moving along the matching edge
+/// direction `(ux, uy)`, first touches the point `(x, y)` — where that ray passes ahead and
+/// within `r` of it. The slices' length is a multiple of [`LANES`].
+#[inline(always)]
+fn lower_bins(limit: &mut [f32], ux: &[f32], uy: &[f32], x: f32, y: f32, r: f32) {
+    let (limit, _) = limit.as_chunks_mut::<LANES>();
+    let (ux, _) = ux.as_chunks::<LANES>();
+    let (uy, _) = uy.as_chunks::<LANES>();
+    for ((limit, ux), uy) in limit.iter_mut().zip(ux).zip(uy) {
+        for i in 0..LANES {
+            let t = x * ux[i] + y * uy[i];
+            let s = (x * uy[i] - y * ux[i]).abs();
+            // r² − s², factored to stay accurate where the ray grazes the disk (s ≈ r).
+            let gap = (r - s) * (r + s);
+            let reach = (t - gap.max(0.0).sqrt()).max(0.0);
+            let touches = (gap > 0.0) & (t > 0.0) & (reach < limit[i]);
+            limit[i] = if touches { reach } else { limit[i] };
         }
     }
 }
 
-/// The bins that overlap the bearing interval `[from, to]` (`to − from < 2π`), wrapping at ±π.
-fn bins_overlapping(from: f64, to: f64) -> impl Iterator<Item = usize> {
-    let first = ((wrap_angle(from) + PI) / BIN_WIDTH).floor() as isize;
-    let count = (((to - from) / BIN_WIDTH).ceil() as isize + 1).clamp(1, BINS as isize);
-    (0..count).map(move |k| (first + k).rem_euclid(BINS as isize) as usize)
+/// The bins that overlap the bearing interval `[from, to]`, wrapping at ±π: the first, and
+/// how many (at least one, at most all).
+fn bins_overlapping(from: f64, to: f64) -> (usize, usize) {
+    let first = ((from + PI) / BIN_WIDTH).floor() as isize;
+    let count = ((to - from) / BIN_WIDTH)
+        .ceil()
+        .clamp(0.0, BINS as f64 - 1.0) as usize
+        + 1;
+    (first.rem_euclid(BINS as isize) as usize, count)
 }
 
 fn wrap_angle(a: f64) -> f64 {

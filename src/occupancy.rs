@@ -13,7 +13,7 @@
 //! can run at every point of every rollout.
 
 use nalgebra::{UnitQuaternion, Vector3};
-use std::f64::consts::{FRAC_PI_2, PI};
+use std::f64::consts::PI;
 
 /// A 2D LiDAR scan in the robot's body frame (the sensor sits at the body origin), with the
 /// semantics of `sensor_msgs/LaserScan` and REP 117: `+inf` = no return within range, `−inf` =
@@ -135,9 +135,12 @@ const BIN_WIDTH: f64 = 2.0 * PI / BINS as f64;
 /// Bins one step of a walk in [`inflate_point`] handles: a fixed-width, branch-free inner loop
 /// that compiles to SIMD.
 const LANES: usize = 8;
-/// The longest walk from a point, in bins: a disk seen from outside spans at most a half turn,
-/// a quarter on each side (`asin(r/ρ) ≤ π/2`), plus two bins of rounding, in whole steps.
-const MAX_WALK: usize = (BINS / 4 + 2).div_ceil(LANES) * LANES;
+/// The most bins a walk from a point needs: a disk seen from outside spans at most a half
+/// turn, a quarter on each side (`asin(r/ρ) ≤ π/2`), plus two bins for the point's offset in
+/// its own bin and rounding.
+const MAX_STEPS: usize = BINS / 4 + 2;
+/// The longest walk, in whole steps of [`LANES`].
+const MAX_WALK: usize = MAX_STEPS.div_ceil(LANES) * LANES;
 /// Bins of padding on each side of the working table, so that walks never wrap around ±π.
 const PAD: usize = MAX_WALK + 1;
 const PADDED: usize = BINS + 2 * PAD;
@@ -202,15 +205,15 @@ impl Occupancy {
         }
 
         // Laterally, the disk must clear the surfaces the returns lie on and the corners where
-        // the visible range steps down between sectors.
+        // the visible range steps down between sectors: gather those points, then inflate them.
         let mut in_collision = false;
-        let edges = bin_edges();
+        let mut points = Points::with_capacity(2 * beams.len());
         let mut inflate = |x: f64, y: f64| {
-            let rho_sq = x * x + y * y;
-            if rho_sq <= radius * radius {
+            if x * x + y * y <= radius * radius {
                 in_collision = true;
             } else {
-                inflate_point(&mut limit, edges, x, y, rho_sq, radius);
+                points.x.push(x as f32);
+                points.y.push(y as f32);
             }
         };
         let full_circle = (beams.len() as f64 + 1.0) * scan.angle_increment.abs() >= 2.0 * PI;
@@ -226,7 +229,7 @@ impl Occupancy {
             if i >= pairs {
                 continue;
             }
-            let next = &beams[(i + 1) % beams.len()];
+            let next = &beams[if i + 1 < beams.len() { i + 1 } else { 0 }];
             match (beam.kind, next.kind) {
                 (Beam::Hit(a), Beam::Hit(b)) if same_surface(a, b, scan.angle_increment) => {
                     // Walls are continuous between neighbouring returns: sample the segment
@@ -243,12 +246,13 @@ impl Occupancy {
                 _ => {
                     let corner = visible_range(beam).min(visible_range(next));
                     if corner > 0.0 && corner.is_finite() {
-                        let bearing = beam.bearing + 0.5 * wrap_angle(next.bearing - beam.bearing);
-                        inflate(corner * bearing.cos(), corner * bearing.sin());
+                        let (x, y) = bisector(beam, next);
+                        inflate(corner * x, corner * y);
                     }
                 }
             }
         }
+        inflate_points(&mut limit, &points, radius);
         // Fold the padding back: padded bin `p` stands for bin `(p − PAD) mod BINS`.
         for p in 0..PAD {
             limit[p + BINS] = limit[p + BINS].min(limit[p]);
@@ -414,51 +418,77 @@ fn bin_edges() -> &'static Edges {
     })
 }
 
-/// Lowers the limits of the bins whose rays bring the robot's disk onto the obstacle point
-/// `(x, y)` (at squared distance `rho_sq > radius²`) in the padded table `limit`. Along a ray
-/// of direction `u`, the disk's centre first touches the point at `t − sqrt(r² − s²)` with
-/// `t = p·u` and `s = p × u`; within a bin the worst ray is the edge nearest the point, so each
-/// bin costs two products and a square root, no trigonometry. Rays within `asin(r/ρ)` of the
-/// point can touch it: the walks on both sides cover that bound in fixed-width steps, and
-/// rays that miss leave their bins as they are.
-fn inflate_point(
-    limit: &mut [f32; PADDED],
-    edges: &Edges,
-    x: f64,
-    y: f64,
-    rho_sq: f64,
-    radius: f64,
-) {
-    let bearing = fast_atan2(y as f32, x as f32) as f64;
-    // Between PAD − 1 and PAD + BINS, since fast_atan2 is within f32 rounding of ±π.
-    let home = ((bearing + PI) / BIN_WIDTH + PAD as f64).floor() as usize;
-    let home = home.clamp(PAD - 1, PAD + BINS);
-    limit[home] = limit[home].min((rho_sq.sqrt() - radius).max(0.0) as f32);
-    // tan(asin(r/ρ)) = r/sqrt(ρ² − r²) bounds the angle from above.
-    let spread = (radius / (rho_sq - radius * radius).sqrt()).min(FRAC_PI_2);
-    let steps = ((spread / BIN_WIDTH) as usize + 2).div_ceil(LANES) * LANES;
-    let walk = steps.min(MAX_WALK);
-    let (x, y, r) = (x as f32, y as f32, radius as f32);
-    // Walking up, a bin's nearest edge is its lower one; walking down, its upper one.
-    let up = home + 1..home + 1 + walk;
-    lower_bins(
-        &mut limit[up.clone()],
-        &edges.x[up.clone()],
-        &edges.y[up],
-        x,
-        y,
-        r,
-    );
-    let down = home - walk..home;
-    let edge = home + 1 - walk..home + 1;
-    lower_bins(
-        &mut limit[down],
-        &edges.x[edge.clone()],
-        &edges.y[edge],
-        x,
-        y,
-        r,
-    );
+/// Obstacle points the robot's disk must clear, x and y apart for the vectorised passes of
+/// [`inflate_points`].
+struct Points {
+    x: Vec<f32>,
+    y: Vec<f32>,
+}
+
+impl Points {
+    fn with_capacity(capacity: usize) -> Self {
+        Self {
+            x: Vec::with_capacity(capacity),
+            y: Vec::with_capacity(capacity),
+        }
+    }
+}
+
+/// Lowers the limits of the bins whose rays bring the robot's disk onto any of the obstacle
+/// `points` (each farther than `radius` from the sensor) in the padded table `limit`. Along a
+/// ray of direction `u`, the disk's centre first touches a point `p` at `t − sqrt(r² − s²)`
+/// with `t = p·u` and `s = p × u`; within a bin the worst ray is the edge nearest the point, so
+/// each bin costs two products and a square root, no trigonometry. Rays within `asin(r/ρ)` of
+/// the point can touch it: walks on both sides of the point's own bin cover that bound in
+/// fixed-width steps, and rays that miss leave their bins as they are.
+fn inflate_points(limit: &mut [f32; PADDED], points: &Points, radius: f64) {
+    use std::f32::consts::{FRAC_PI_2, PI};
+    let n = points.x.len().min(points.y.len());
+    let (xs, ys) = (&points.x[..n], &points.y[..n]);
+    let r = radius as f32;
+    let per_radian = (1.0 / BIN_WIDTH) as f32;
+    // First, for all points at once (the loop vectorises): the padded bin each lies in, the
+    // limit it sets there, and the length of its walks.
+    let mut homes = vec![0u32; n];
+    let mut reaches = vec![0f32; n];
+    let mut walks = vec![0u32; n];
+    for i in 0..n {
+        let (x, y) = (xs[i], ys[i]);
+        let rho_sq = x * x + y * y;
+        // Between PAD − 1 and PAD + BINS, since fast_atan2 is within f32 rounding of ±π.
+        let home = ((fast_atan2(y, x) + PI) * per_radian + PAD as f32).floor() as i32;
+        homes[i] = home.clamp(PAD as i32 - 1, (PAD + BINS) as i32) as u32;
+        reaches[i] = (rho_sq.sqrt() - r).max(0.0);
+        // tan(asin(r/ρ)) = r/sqrt(ρ² − r²) bounds the angle from above (NaN → a quarter turn).
+        let spread = (r / (rho_sq - r * r).sqrt()).min(FRAC_PI_2);
+        let steps = ((spread * per_radian) as u32 + 2).min(MAX_STEPS as u32);
+        walks[i] = steps.div_ceil(LANES as u32) * LANES as u32;
+    }
+    let edges = bin_edges();
+    for i in 0..n {
+        let (x, y, home, walk) = (xs[i], ys[i], homes[i] as usize, walks[i] as usize);
+        limit[home] = limit[home].min(reaches[i]);
+        // Walking up, a bin's nearest edge is its lower one; walking down, its upper one.
+        let up = home + 1..home + 1 + walk;
+        lower_bins(
+            &mut limit[up.clone()],
+            &edges.x[up.clone()],
+            &edges.y[up],
+            x,
+            y,
+            r,
+        );
+        let down = home - walk..home;
+        let edge = home + 1 - walk..home + 1;
+        lower_bins(
+            &mut limit[down],
+            &edges.x[edge.clone()],
+            &edges.y[edge],
+            x,
+            y,
+            r,
+        );
+    }
 }
 
 /// Lowers each bin of `limit` to where the disk, its centre moving along the matching edge
@@ -491,6 +521,21 @@ fn bins_overlapping(from: f64, to: f64) -> (usize, usize) {
         .clamp(0.0, BINS as f64 - 1.0) as usize
         + 1;
     (first.rem_euclid(BINS as isize) as usize, count)
+}
+
+/// The horizontal unit direction halfway between two beams: their directions' normalised
+/// sum, or from their bearings where that sum is short (beams more than 120° apart, or
+/// vertical ones).
+fn bisector(a: &ProjectedBeam, b: &ProjectedBeam) -> (f64, f64) {
+    let (x, y) = (a.direction.0 + b.direction.0, a.direction.1 + b.direction.1);
+    let norm_sq = x * x + y * y;
+    if norm_sq >= 1.0 {
+        let inv = 1.0 / norm_sq.sqrt();
+        (x * inv, y * inv)
+    } else {
+        let (sin, cos) = (a.bearing + 0.5 * wrap_angle(b.bearing - a.bearing)).sin_cos();
+        (cos, sin)
+    }
 }
 
 fn wrap_angle(a: f64) -> f64 {

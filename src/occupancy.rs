@@ -12,7 +12,7 @@
 //! Built once per scan in O(beams); each query is a bearing lookup and one comparison, so it
 //! can run at every point of every rollout.
 
-use nalgebra::{UnitQuaternion, Vector3};
+use nalgebra::UnitQuaternion;
 use std::f64::consts::PI;
 
 /// A 2D LiDAR scan in the robot's body frame (the sensor sits at the body origin), with the
@@ -132,6 +132,7 @@ pub struct OccupancyOptions {
 /// the 1° of common scanners.
 const BINS: usize = 720;
 const BIN_WIDTH: f64 = 2.0 * PI / BINS as f64;
+const BINS_PER_RADIAN: f64 = BINS as f64 / (2.0 * PI);
 /// Bins one step of a walk in [`inflate_point`] handles: a fixed-width, branch-free inner loop
 /// that compiles to SIMD.
 const LANES: usize = 8;
@@ -168,7 +169,7 @@ impl Occupancy {
         options: &OccupancyOptions,
     ) -> Self {
         let radius = options.robot_radius.max(0.0);
-        let beams = project_beams(scan, attitude);
+        let (beams, summary) = project_beams(scan, attitude);
         let unknown_limit = match options.unknown_space {
             UnknownSpace::Occupied => 0.0,
             UnknownSpace::Free => f64::INFINITY,
@@ -189,14 +190,22 @@ impl Occupancy {
         let table = &mut limit[PAD..PAD + BINS];
         table.fill(f32::NAN);
 
-        // Radially, the disk's centre stays `radius` inside what each beam's sector saw.
+        // Radially, the disk's centre stays `radius` inside what each beam's sector saw. Every
+        // sector overlaps as many bins (at least one, at most all).
+        let sector_bins = (2.0 * half_sector * BINS_PER_RADIAN)
+            .ceil()
+            .clamp(0.0, BINS as f64 - 1.0) as usize
+            + 1;
         for beam in &beams {
             let allowed = (visible_range(beam) - radius).max(0.0) as f32;
-            let (first, count) =
-                bins_overlapping(beam.bearing - half_sector, beam.bearing + half_sector);
+            let first = ((beam.bearing - half_sector + PI) * BINS_PER_RADIAN).floor() as isize;
+            let first = first.rem_euclid(BINS as isize) as usize;
             let (wrapped, rest) = table.split_at_mut(first);
-            let head = count.min(rest.len());
-            for l in rest[..head].iter_mut().chain(&mut wrapped[..count - head]) {
+            let head = sector_bins.min(rest.len());
+            for l in rest[..head]
+                .iter_mut()
+                .chain(&mut wrapped[..sector_bins - head])
+            {
                 *l = l.min(allowed);
             }
         }
@@ -216,6 +225,8 @@ impl Occupancy {
                 points.y.push(y as f32);
             }
         };
+        let breakpoints = Breakpoints::new(scan.angle_increment);
+        let pieces_per_metre = 2.0 / radius.max(1e-3);
         let full_circle = (beams.len() as f64 + 1.0) * scan.angle_increment.abs() >= 2.0 * PI;
         let pairs = if full_circle {
             beams.len()
@@ -231,15 +242,16 @@ impl Occupancy {
             }
             let next = &beams[if i + 1 < beams.len() { i + 1 } else { 0 }];
             match (beam.kind, next.kind) {
-                (Beam::Hit(a), Beam::Hit(b)) if same_surface(a, b, scan.angle_increment) => {
+                (Beam::Hit(a), Beam::Hit(b)) if breakpoints.same_surface(a, b) => {
                     // Walls are continuous between neighbouring returns: sample the segment
                     // densely enough (half a radius) that the disk cannot slip through it.
                     let (ax, ay) = (a * beam.direction.0, a * beam.direction.1);
                     let (bx, by) = (b * next.direction.0, b * next.direction.1);
                     let length = ((bx - ax).powi(2) + (by - ay).powi(2)).sqrt();
-                    let pieces = (2.0 * length / radius.max(1e-3)).ceil() as usize;
+                    let pieces = (length * pieces_per_metre).ceil() as usize;
+                    let step = 1.0 / pieces as f64;
                     for k in 1..pieces {
-                        let t = k as f64 / pieces as f64;
+                        let t = k as f64 * step;
                         inflate(ax + t * (bx - ax), ay + t * (by - ay));
                     }
                 }
@@ -277,7 +289,7 @@ impl Occupancy {
             limit_sq,
             z_range: (z_low as f32, z_high as f32),
             in_collision,
-            summary: scan.summary(),
+            summary,
         }
     }
 
@@ -355,44 +367,77 @@ struct ProjectedBeam {
     scale: f64,
 }
 
-fn project_beams(scan: &Scan, attitude: &UnitQuaternion<f64>) -> Vec<ProjectedBeam> {
+/// The scan's beams in the world-aligned plane, and their counts by kind.
+fn project_beams(scan: &Scan, attitude: &UnitQuaternion<f64>) -> (Vec<ProjectedBeam>, ScanSummary) {
+    // Only the horizontal part of a rotated beam matters: two rows of the rotation matrix.
+    let m = attitude.to_rotation_matrix().into_inner();
+    let (xx, xy, yx, yy) = (m[(0, 0)], m[(0, 1)], m[(1, 0)], m[(1, 1)]);
     // Beam directions by repeated rotation: one complex multiplication per beam, not a sin/cos.
     let (step_sin, step_cos) = scan.angle_increment.sin_cos();
     let (mut sin, mut cos) = scan.angle_min.sin_cos();
-    (0..scan.ranges.len())
+    let mut summary = ScanSummary::default();
+    let beams = (0..scan.ranges.len())
         .map(|i| {
-            let world = attitude * Vector3::new(cos, sin, 0.0);
+            let (x, y) = (xx * cos + xy * sin, yx * cos + yy * sin);
             (sin, cos) = (
                 sin * step_cos + cos * step_sin,
                 cos * step_cos - sin * step_sin,
             );
-            let scale = world.xy().norm();
+            let scale = (x * x + y * y).sqrt();
             let kind = match scan.beam(i) {
-                Beam::Hit(r) => Beam::Hit(r * scale),
-                other => other,
+                Beam::Hit(r) => {
+                    summary.hits += 1;
+                    Beam::Hit(r * scale)
+                }
+                Beam::NoReturn => {
+                    summary.no_returns += 1;
+                    Beam::NoReturn
+                }
+                Beam::Invalid => {
+                    summary.invalid += 1;
+                    Beam::Invalid
+                }
             };
             let inv = if scale > 0.0 { 1.0 / scale } else { 0.0 };
             ProjectedBeam {
                 kind,
-                bearing: fast_atan2(world.y as f32, world.x as f32) as f64,
-                direction: (world.x * inv, world.y * inv),
+                bearing: fast_atan2(y as f32, x as f32) as f64,
+                direction: (x * inv, y * inv),
                 scale,
             }
         })
-        .collect()
+        .collect();
+    (beams, summary)
 }
 
-/// Whether two neighbouring returns lie on one surface: the adaptive breakpoint test (Borges &
-/// Aldon, 2004) — their gap is no larger than a surface seen at 10° incidence would leave,
-/// plus three times a 1 cm range noise.
-fn same_surface(a: f64, b: f64, angle_increment: f64) -> bool {
+/// The adaptive breakpoint test (Borges & Aldon, 2004) for neighbouring returns of a scan:
+/// they lie on one surface when their gap is no larger than a surface seen at 10° incidence
+/// would leave, plus three times a 1 cm range noise.
+struct Breakpoints {
+    /// Cosine of the angle between neighbouring beams.
+    cos_step: f64,
+    /// The largest gap per metre of the nearer range, at the smallest incidence.
+    gap_per_metre: f64,
+}
+
+impl Breakpoints {
     const MIN_INCIDENCE: f64 = 10.0 * PI / 180.0;
     const RANGE_SIGMA: f64 = 0.01;
-    let step = angle_increment.abs();
-    let gap_sq = a * a + b * b - 2.0 * a * b * step.cos();
-    let allowed =
-        a.min(b) * step.sin() / (MIN_INCIDENCE - step).sin().max(1e-6) + 3.0 * RANGE_SIGMA;
-    gap_sq <= allowed * allowed
+
+    fn new(angle_increment: f64) -> Self {
+        let step = angle_increment.abs();
+        Self {
+            cos_step: step.cos(),
+            gap_per_metre: step.sin() / (Self::MIN_INCIDENCE - step).sin().max(1e-6),
+        }
+    }
+
+    /// Whether neighbouring returns at ranges `a` and `b` lie on one surface.
+    fn same_surface(&self, a: f64, b: f64) -> bool {
+        let gap_sq = a * a + b * b - 2.0 * a * b * self.cos_step;
+        let allowed = a.min(b) * self.gap_per_metre + 3.0 * Self::RANGE_SIGMA;
+        gap_sq <= allowed * allowed
+    }
 }
 
 /// Unit directions of the bin edges of the padded table, x and y apart so that walks load
@@ -446,7 +491,7 @@ fn inflate_points(limit: &mut [f32; PADDED], points: &Points, radius: f64) {
     let n = points.x.len().min(points.y.len());
     let (xs, ys) = (&points.x[..n], &points.y[..n]);
     let r = radius as f32;
-    let per_radian = (1.0 / BIN_WIDTH) as f32;
+    let per_radian = BINS_PER_RADIAN as f32;
     // First, for all points at once (the loop vectorises): the padded bin each lies in, the
     // limit it sets there, and the length of its walks.
     let mut homes = vec![0u32; n];
@@ -510,17 +555,6 @@ fn lower_bins(limit: &mut [f32], ux: &[f32], uy: &[f32], x: f32, y: f32, r: f32)
             limit[i] = if touches { reach } else { limit[i] };
         }
     }
-}
-
-/// The bins that overlap the bearing interval `[from, to]`, wrapping at ±π: the first, and
-/// how many (at least one, at most all).
-fn bins_overlapping(from: f64, to: f64) -> (usize, usize) {
-    let first = ((from + PI) / BIN_WIDTH).floor() as isize;
-    let count = ((to - from) / BIN_WIDTH)
-        .ceil()
-        .clamp(0.0, BINS as f64 - 1.0) as usize
-        + 1;
-    (first.rem_euclid(BINS as isize) as usize, count)
 }
 
 /// The horizontal unit direction halfway between two beams: their directions' normalised

@@ -493,21 +493,22 @@ fn inflate_points(limit: &mut [f32; PADDED], points: &Points, radius: f64) {
     let r = radius as f32;
     let per_radian = BINS_PER_RADIAN as f32;
     // First, for all points at once (the loop vectorises): the padded bin each lies in, the
-    // limit it sets there, and the length of its walks.
-    let mut homes = vec![0u32; n];
+    // limit it sets there, and the length of its walks — whole numbers, kept as floats since
+    // saturating conversions to integers would not vectorise.
+    let mut homes = vec![0f32; n];
     let mut reaches = vec![0f32; n];
-    let mut walks = vec![0u32; n];
+    let mut walks = vec![0f32; n];
     for i in 0..n {
         let (x, y) = (xs[i], ys[i]);
         let rho_sq = x * x + y * y;
         // Between PAD − 1 and PAD + BINS, since fast_atan2 is within f32 rounding of ±π.
-        let home = ((fast_atan2(y, x) + PI) * per_radian + PAD as f32).floor() as i32;
-        homes[i] = home.clamp(PAD as i32 - 1, (PAD + BINS) as i32) as u32;
+        let home = ((fast_atan2(y, x) + PI) * per_radian + PAD as f32).floor();
+        homes[i] = home.max(PAD as f32 - 1.0).min((PAD + BINS) as f32);
         reaches[i] = (rho_sq.sqrt() - r).max(0.0);
         // tan(asin(r/ρ)) = r/sqrt(ρ² − r²) bounds the angle from above (NaN → a quarter turn).
         let spread = (r / (rho_sq - r * r).sqrt()).min(FRAC_PI_2);
-        let steps = ((spread * per_radian) as u32 + 2).min(MAX_STEPS as u32);
-        walks[i] = steps.div_ceil(LANES as u32) * LANES as u32;
+        let steps = ((spread * per_radian).floor() + 2.0).min(MAX_STEPS as f32);
+        walks[i] = (steps * (1.0 / LANES as f32)).ceil() * LANES as f32;
     }
     let edges = bin_edges();
     for i in 0..n {

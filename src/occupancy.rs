@@ -169,21 +169,10 @@ impl Occupancy {
         options: &OccupancyOptions,
     ) -> Self {
         let radius = options.robot_radius.max(0.0);
-        let (beams, summary) = project_beams(scan, attitude);
-        let unknown_limit = match options.unknown_space {
-            UnknownSpace::Occupied => 0.0,
-            UnknownSpace::Free => f64::INFINITY,
-        };
-        let visible_range = |beam: &ProjectedBeam| match beam.kind {
-            Beam::Hit(rho) => rho,
-            Beam::NoReturn => match options.unknown_space {
-                UnknownSpace::Occupied => beam.scale * scan.range_max,
-                UnknownSpace::Free => f64::INFINITY,
-            },
-            Beam::Invalid => unknown_limit,
-        };
+        let (beams, summary) = Beams::project(scan, attitude, options.unknown_space);
+        let n = beams.len();
         let half_sector = 0.5 * scan.angle_increment.abs();
-        // The working table: padded on both sides so that no walk of `inflate_point` wraps;
+        // The working table: padded on both sides so that no walk of `inflate_points` wraps;
         // the padding folds back onto the bins it stands for at the end. NaN marks bins no
         // beam's sector covers.
         let mut limit = [f32::INFINITY; PADDED];
@@ -191,32 +180,43 @@ impl Occupancy {
         table.fill(f32::NAN);
 
         // Radially, the disk's centre stays `radius` inside what each beam's sector saw. Every
-        // sector overlaps as many bins (at least one, at most all).
+        // sector overlaps as many bins (at least one, at most all); where each starts and
+        // what it allows comes first, for all beams at once (the loop vectorises).
         let sector_bins = (2.0 * half_sector * BINS_PER_RADIAN)
             .ceil()
             .clamp(0.0, BINS as f64 - 1.0) as usize
             + 1;
-        for beam in &beams {
-            let allowed = (visible_range(beam) - radius).max(0.0) as f32;
-            let first = ((beam.bearing - half_sector + PI) * BINS_PER_RADIAN).floor() as isize;
-            let first = first.rem_euclid(BINS as isize) as usize;
-            let (wrapped, rest) = table.split_at_mut(first);
-            let head = sector_bins.min(rest.len());
-            for l in rest[..head]
-                .iter_mut()
-                .chain(&mut wrapped[..sector_bins - head])
-            {
-                *l = l.min(allowed);
+        let mut allowed = vec![0f32; n];
+        let mut first = vec![0f64; n];
+        let columns = allowed.iter_mut().zip(&mut first);
+        for ((allowed, first), (&visible, &bearing)) in
+            columns.zip(beams.visible.iter().zip(&beams.bearing))
+        {
+            *allowed = (visible - radius).max(0.0) as f32;
+            // Bearings lie within [−π, π], so one turn brings a negative bin into the table.
+            let bin = ((bearing - half_sector + PI) * BINS_PER_RADIAN).floor();
+            *first = if bin < 0.0 { bin + BINS as f64 } else { bin };
+        }
+        for (&first, &allowed) in first.iter().zip(&allowed) {
+            let first = (first as usize).min(BINS - 1);
+            for bin in first..first + sector_bins {
+                let l = &mut table[if bin < BINS { bin } else { bin - BINS }];
+                // Takes `allowed` over the NaN of a bin no sector has covered yet.
+                *l = if *l <= allowed { *l } else { allowed };
             }
         }
-        for l in table.iter_mut().filter(|l| l.is_nan()) {
-            *l = unknown_limit as f32;
+        let unknown_limit = match options.unknown_space {
+            UnknownSpace::Occupied => 0.0,
+            UnknownSpace::Free => f32::INFINITY,
+        };
+        for l in table.iter_mut() {
+            *l = if l.is_nan() { unknown_limit } else { *l };
         }
 
         // Laterally, the disk must clear the surfaces the returns lie on and the corners where
         // the visible range steps down between sectors: gather those points, then inflate them.
         let mut in_collision = false;
-        let mut points = Points::with_capacity(2 * beams.len());
+        let mut points = Points::with_capacity(2 * n);
         let mut inflate = |x: f64, y: f64| {
             if x * x + y * y <= radius * radius {
                 in_collision = true;
@@ -227,40 +227,35 @@ impl Occupancy {
         };
         let breakpoints = Breakpoints::new(scan.angle_increment);
         let pieces_per_metre = 2.0 / radius.max(1e-3);
-        let full_circle = (beams.len() as f64 + 1.0) * scan.angle_increment.abs() >= 2.0 * PI;
-        let pairs = if full_circle {
-            beams.len()
-        } else {
-            beams.len().saturating_sub(1)
-        };
-        for (i, beam) in beams.iter().enumerate() {
-            if let Beam::Hit(rho) = beam.kind {
-                inflate(rho * beam.direction.0, rho * beam.direction.1);
+        let full_circle = (n as f64 + 1.0) * scan.angle_increment.abs() >= 2.0 * PI;
+        let pairs = if full_circle { n } else { n.saturating_sub(1) };
+        for i in 0..n {
+            let (a, direction) = (beams.hit[i], (beams.x[i], beams.y[i]));
+            if !a.is_nan() {
+                inflate(a * direction.0, a * direction.1);
             }
             if i >= pairs {
                 continue;
             }
-            let next = &beams[if i + 1 < beams.len() { i + 1 } else { 0 }];
-            match (beam.kind, next.kind) {
-                (Beam::Hit(a), Beam::Hit(b)) if breakpoints.same_surface(a, b) => {
-                    // Walls are continuous between neighbouring returns: sample the segment
-                    // densely enough (half a radius) that the disk cannot slip through it.
-                    let (ax, ay) = (a * beam.direction.0, a * beam.direction.1);
-                    let (bx, by) = (b * next.direction.0, b * next.direction.1);
-                    let length = ((bx - ax).powi(2) + (by - ay).powi(2)).sqrt();
-                    let pieces = (length * pieces_per_metre).ceil() as usize;
-                    let step = 1.0 / pieces as f64;
-                    for k in 1..pieces {
-                        let t = k as f64 * step;
-                        inflate(ax + t * (bx - ax), ay + t * (by - ay));
-                    }
+            let j = if i + 1 < n { i + 1 } else { 0 };
+            let b = beams.hit[j];
+            if !a.is_nan() && !b.is_nan() && breakpoints.same_surface(a, b) {
+                // Walls are continuous between neighbouring returns: sample the segment
+                // densely enough (half a radius) that the disk cannot slip through it.
+                let (ax, ay) = (a * direction.0, a * direction.1);
+                let (bx, by) = (b * beams.x[j], b * beams.y[j]);
+                let length = ((bx - ax).powi(2) + (by - ay).powi(2)).sqrt();
+                let pieces = (length * pieces_per_metre).ceil() as usize;
+                let step = 1.0 / pieces as f64;
+                for k in 1..pieces {
+                    let t = k as f64 * step;
+                    inflate(ax + t * (bx - ax), ay + t * (by - ay));
                 }
-                _ => {
-                    let corner = visible_range(beam).min(visible_range(next));
-                    if corner > 0.0 && corner.is_finite() {
-                        let (x, y) = bisector(beam, next);
-                        inflate(corner * x, corner * y);
-                    }
+            } else {
+                let corner = beams.visible[i].min(beams.visible[j]);
+                if corner > 0.0 && corner.is_finite() {
+                    let (x, y) = beams.bisector(i, j);
+                    inflate(corner * x, corner * y);
                 }
             }
         }
@@ -357,64 +352,102 @@ impl Occupancy {
 /// Lanes checked together by [`Occupancy::mark_collisions`]: one AVX-512 register of `f32`.
 const CHECK_CHUNK: usize = 16;
 
-/// A beam in the world-aligned horizontal plane.
-struct ProjectedBeam {
-    kind: Beam,
-    bearing: f64,
-    /// Unit direction of the beam's horizontal projection.
-    direction: (f64, f64),
-    /// Horizontal length of a unit range along this beam (below 1 when the robot is tilted).
-    scale: f64,
+/// The scan's beams in the world-aligned horizontal plane, one column per quantity (so that
+/// arithmetic over beams vectorises).
+struct Beams {
+    /// Horizontal range of each beam's return; NaN for a beam without one.
+    hit: Vec<f64>,
+    /// Horizontal range each beam shows free: its return's, or what the unknown-space policy
+    /// makes of a beam without one.
+    visible: Vec<f64>,
+    /// Bearing of each beam's horizontal projection, radians.
+    bearing: Vec<f64>,
+    /// Unit direction of that projection (zero for a vertical beam), x and y.
+    x: Vec<f64>,
+    y: Vec<f64>,
 }
 
-/// The scan's beams in the world-aligned plane, and their counts by kind.
-fn project_beams(scan: &Scan, attitude: &UnitQuaternion<f64>) -> (Vec<ProjectedBeam>, ScanSummary) {
-    let n = scan.ranges.len();
-    let (mut xs, mut ys) = beam_directions(scan.angle_min, scan.angle_increment, n);
-    // Only the horizontal part of a rotated beam matters: two rows of the rotation matrix.
-    // Column by column, so that the loop vectorises.
-    let m = attitude.to_rotation_matrix().into_inner();
-    let (xx, xy, yx, yy) = (m[(0, 0)], m[(0, 1)], m[(1, 0)], m[(1, 1)]);
-    let mut scales = vec![0.0; n];
-    let mut bearings = vec![0.0; n];
-    let columns = xs
-        .iter_mut()
-        .zip(&mut ys)
-        .zip(&mut scales)
-        .zip(&mut bearings);
-    for (((x, y), scale), bearing) in columns {
-        let (wx, wy) = (xx * *x + xy * *y, yx * *x + yy * *y);
-        *scale = (wx * wx + wy * wy).sqrt();
-        let inv = if *scale > 0.0 { 1.0 / *scale } else { 0.0 };
-        (*x, *y) = (wx * inv, wy * inv);
-        *bearing = fast_atan2(wy as f32, wx as f32) as f64;
-    }
-    let mut summary = ScanSummary::default();
-    let beams = (0..n)
-        .map(|i| {
-            let kind = match scan.beam(i) {
-                Beam::Hit(r) => {
+impl Beams {
+    /// Projects the beams of `scan`, taken at `attitude`, and counts them by kind.
+    fn project(
+        scan: &Scan,
+        attitude: &UnitQuaternion<f64>,
+        unknown_space: UnknownSpace,
+    ) -> (Self, ScanSummary) {
+        let n = scan.ranges.len();
+        let (mut x, mut y) = beam_directions(scan.angle_min, scan.angle_increment, n);
+        // Only the horizontal part of a rotated beam matters: two rows of the rotation matrix.
+        // Column by column, so that the loop vectorises.
+        let m = attitude.to_rotation_matrix().into_inner();
+        let (xx, xy, yx, yy) = (m[(0, 0)], m[(0, 1)], m[(1, 0)], m[(1, 1)]);
+        let mut scales = vec![0.0; n];
+        let mut bearing = vec![0.0; n];
+        let columns = x.iter_mut().zip(&mut y).zip(&mut scales).zip(&mut bearing);
+        for (((x, y), scale), bearing) in columns {
+            let (wx, wy) = (xx * *x + xy * *y, yx * *x + yy * *y);
+            *scale = (wx * wx + wy * wy).sqrt();
+            let inv = if *scale > 0.0 { 1.0 / *scale } else { 0.0 };
+            (*x, *y) = (wx * inv, wy * inv);
+            *bearing = fast_atan2(wy as f32, wx as f32) as f64;
+        }
+        let unknown = match unknown_space {
+            UnknownSpace::Occupied => 0.0,
+            UnknownSpace::Free => f64::INFINITY,
+        };
+        let mut summary = ScanSummary::default();
+        let mut hit = vec![f64::NAN; n];
+        let mut visible = vec![0.0; n];
+        for (i, ((hit, visible), &scale)) in
+            hit.iter_mut().zip(&mut visible).zip(&scales).enumerate()
+        {
+            *visible = match scan.beam(i) {
+                Beam::Hit(range) => {
                     summary.hits += 1;
-                    Beam::Hit(r * scales[i])
+                    *hit = range * scale;
+                    *hit
                 }
                 Beam::NoReturn => {
                     summary.no_returns += 1;
-                    Beam::NoReturn
+                    match unknown_space {
+                        UnknownSpace::Occupied => scale * scan.range_max,
+                        UnknownSpace::Free => f64::INFINITY,
+                    }
                 }
                 Beam::Invalid => {
                     summary.invalid += 1;
-                    Beam::Invalid
+                    unknown
                 }
             };
-            ProjectedBeam {
-                kind,
-                bearing: bearings[i],
-                direction: (xs[i], ys[i]),
-                scale: scales[i],
-            }
-        })
-        .collect();
-    (beams, summary)
+        }
+        let beams = Self {
+            hit,
+            visible,
+            bearing,
+            x,
+            y,
+        };
+        (beams, summary)
+    }
+
+    fn len(&self) -> usize {
+        self.hit.len()
+    }
+
+    /// The horizontal unit direction halfway between beams `i` and `j`: their directions'
+    /// normalised sum, or from their bearings where that sum is short (beams more than 120°
+    /// apart, or vertical ones).
+    fn bisector(&self, i: usize, j: usize) -> (f64, f64) {
+        let (x, y) = (self.x[i] + self.x[j], self.y[i] + self.y[j]);
+        let norm_sq = x * x + y * y;
+        if norm_sq >= 1.0 {
+            let inv = 1.0 / norm_sq.sqrt();
+            (x * inv, y * inv)
+        } else {
+            let turn = wrap_angle(self.bearing[j] - self.bearing[i]);
+            let (sin, cos) = (self.bearing[i] + 0.5 * turn).sin_cos();
+            (cos, sin)
+        }
+    }
 }
 
 /// Unit directions (cos, sin) of the `n` beam angles `angle_min + i·angle_increment`, by
@@ -598,21 +631,6 @@ fn lower_bins(limit: &mut [f32], ux: &[f32], uy: &[f32], x: f32, y: f32, r: f32)
             let touches = (gap > 0.0) & (t > 0.0) & (reach < limit[i]);
             limit[i] = if touches { reach } else { limit[i] };
         }
-    }
-}
-
-/// The horizontal unit direction halfway between two beams: their directions' normalised
-/// sum, or from their bearings where that sum is short (beams more than 120° apart, or
-/// vertical ones).
-fn bisector(a: &ProjectedBeam, b: &ProjectedBeam) -> (f64, f64) {
-    let (x, y) = (a.direction.0 + b.direction.0, a.direction.1 + b.direction.1);
-    let norm_sq = x * x + y * y;
-    if norm_sq >= 1.0 {
-        let inv = 1.0 / norm_sq.sqrt();
-        (x * inv, y * inv)
-    } else {
-        let (sin, cos) = (a.bearing + 0.5 * wrap_angle(b.bearing - a.bearing)).sin_cos();
-        (cos, sin)
     }
 }
 

@@ -225,31 +225,27 @@ impl Occupancy {
                 points.y.push(y as f32);
             }
         };
-        let breakpoints = Breakpoints::new(scan.angle_increment);
-        let pieces_per_metre = 2.0 / radius.max(1e-3);
         let full_circle = (n as f64 + 1.0) * scan.angle_increment.abs() >= 2.0 * PI;
         let pairs = if full_circle { n } else { n.saturating_sub(1) };
+        let surfaces = Surfaces::find(&beams, pairs, scan.angle_increment, radius);
         for i in 0..n {
-            let (a, direction) = (beams.hit[i], (beams.x[i], beams.y[i]));
-            if !a.is_nan() {
-                inflate(a * direction.0, a * direction.1);
+            let (x, y) = (surfaces.x[i], surfaces.y[i]);
+            if !x.is_nan() {
+                inflate(x, y);
             }
             if i >= pairs {
                 continue;
             }
             let j = if i + 1 < n { i + 1 } else { 0 };
-            let b = beams.hit[j];
-            if !a.is_nan() && !b.is_nan() && breakpoints.same_surface(a, b) {
+            let pieces = surfaces.pieces[i];
+            if pieces >= 0.0 {
                 // Walls are continuous between neighbouring returns: sample the segment
                 // densely enough (half a radius) that the disk cannot slip through it.
-                let (ax, ay) = (a * direction.0, a * direction.1);
-                let (bx, by) = (b * beams.x[j], b * beams.y[j]);
-                let length = ((bx - ax).powi(2) + (by - ay).powi(2)).sqrt();
-                let pieces = (length * pieces_per_metre).ceil() as usize;
-                let step = 1.0 / pieces as f64;
-                for k in 1..pieces {
+                let (dx, dy) = (surfaces.x[j] - x, surfaces.y[j] - y);
+                let step = 1.0 / pieces;
+                for k in 1..pieces as usize {
                     let t = k as f64 * step;
-                    inflate(ax + t * (bx - ax), ay + t * (by - ay));
+                    inflate(x + t * dx, y + t * dy);
                 }
             } else {
                 let corner = beams.visible[i].min(beams.visible[j]);
@@ -485,6 +481,60 @@ fn beam_directions(angle_min: f64, angle_increment: f64, n: usize) -> (Vec<f64>,
 
 /// Beams whose directions [`beam_directions`] rotates at once.
 const ROTATION_BLOCK: usize = 8;
+
+/// The returns of a scan and the surfaces between them, worked out for all beams at once (the
+/// loops vectorise).
+struct Surfaces {
+    /// Each beam's return, x and y; NaN for a beam without one.
+    x: Vec<f64>,
+    y: Vec<f64>,
+    /// For each pair of neighbouring beams `i` and `i + 1` (the last with the first on a full
+    /// circle), the pieces into which the segment between their returns is sampled, every half
+    /// radius at most, where both returns lie on one surface; −1 where they do not.
+    pieces: Vec<f64>,
+}
+
+impl Surfaces {
+    fn find(beams: &Beams, pairs: usize, angle_increment: f64, radius: f64) -> Self {
+        let x: Vec<f64> = beams.hit.iter().zip(&beams.x).map(|(h, x)| h * x).collect();
+        let y: Vec<f64> = beams.hit.iter().zip(&beams.y).map(|(h, y)| h * y).collect();
+        let breakpoints = Breakpoints::new(angle_increment);
+        let pieces_per_metre = 2.0 / radius.max(1e-3);
+        let split = |(a, b): (f64, f64), (ax, bx): (f64, f64), (ay, by): (f64, f64)| {
+            // Branch-free, so that the loop vectorises; NaN (no return) fails the test.
+            let length = ((bx - ax).powi(2) + (by - ay).powi(2)).sqrt();
+            let pieces = (length * pieces_per_metre).ceil();
+            if breakpoints.same_surface(a, b) {
+                pieces
+            } else {
+                -1.0
+            }
+        };
+        let n = beams.len();
+        let m = n.saturating_sub(1);
+        let mut pieces = vec![0.0; m];
+        let (a, b) = (&beams.hit[..m], &beams.hit[n - m..]);
+        let (ax, bx) = (&x[..m], &x[n - m..]);
+        let (ay, by) = (&y[..m], &y[n - m..]);
+        let ends = a
+            .iter()
+            .zip(b)
+            .zip(ax.iter().zip(bx))
+            .zip(ay.iter().zip(by));
+        for (pieces, ((a, x), y)) in pieces.iter_mut().zip(ends) {
+            *pieces = split((*a.0, *a.1), (*x.0, *x.1), (*y.0, *y.1));
+        }
+        if pairs == n && n > 0 {
+            let last = n - 1;
+            pieces.push(split(
+                (beams.hit[last], beams.hit[0]),
+                (x[last], x[0]),
+                (y[last], y[0]),
+            ));
+        }
+        Self { x, y, pieces }
+    }
+}
 
 /// The adaptive breakpoint test (Borges & Aldon, 2004) for neighbouring returns of a scan:
 /// they lie on one surface when their gap is no larger than a surface seen at 10° incidence

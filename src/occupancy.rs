@@ -490,9 +490,16 @@ struct Surfaces {
     y: Vec<f64>,
     /// For each pair of neighbouring beams `i` and `i + 1` (the last with the first on a full
     /// circle), the pieces into which the segment between their returns is sampled, every half
-    /// radius at most, where both returns lie on one surface; −1 where they do not.
+    /// radius at most (and at most [`MAX_PIECES`] pieces), where both returns lie on one
+    /// surface; −1 where they do not.
     pieces: Vec<f64>,
 }
+
+/// The most pieces one segment between neighbouring returns is sampled into. Half a radius
+/// apart, that is a segment 512 radii long (30 m for a 6 cm robot), between returns hundreds of
+/// metres away; only absurd ranges (a scan may report up to 3.4e38 m) make longer ones, which
+/// are then sampled more sparsely rather than without end.
+const MAX_PIECES: f64 = 1024.0;
 
 impl Surfaces {
     fn find(beams: &Beams, pairs: usize, angle_increment: f64, radius: f64) -> Self {
@@ -503,7 +510,7 @@ impl Surfaces {
         let split = |(a, b): (f64, f64), (ax, bx): (f64, f64), (ay, by): (f64, f64)| {
             // Branch-free, so that the loop vectorises; NaN (no return) fails the test.
             let length = ((bx - ax).powi(2) + (by - ay).powi(2)).sqrt();
-            let pieces = (length * pieces_per_metre).ceil();
+            let pieces = (length * pieces_per_metre).ceil().min(MAX_PIECES);
             if breakpoints.same_surface(a, b) {
                 pieces
             } else {
@@ -892,6 +899,45 @@ mod tests {
                         assert!(!occupancy.is_free(x as f32, y as f32, 0.0), "({x}, {y})");
                     }
                 }
+            }
+        }
+    }
+
+    #[test]
+    fn absurd_scans_build_without_panicking_or_stalling() {
+        let huge = Scan {
+            range_max: f64::MAX,
+            ..ring(f32::MAX, 1440)
+        };
+        let mut mixed = ring(1e30, 720);
+        mixed.range_max = 1e31;
+        for (i, r) in mixed.ranges.iter_mut().enumerate() {
+            *r = [1e-30, f32::NAN, f32::NEG_INFINITY, f32::INFINITY, 0.0, 1e30][i % 6];
+        }
+        let scans = [
+            huge,
+            mixed,
+            ring(f32::NAN, 360),
+            ring(1e-30, 360),
+            Scan {
+                ranges: Vec::new(),
+                ..ring(1.0, 1)
+            },
+            Scan {
+                angle_increment: f64::NAN,
+                ..ring(1.0, 10)
+            },
+            Scan {
+                angle_increment: 0.0,
+                ..ring(1.0, 10)
+            },
+        ];
+        for scan in &scans {
+            for unknown_space in [UnknownSpace::Occupied, UnknownSpace::Free] {
+                let mut opts = options(0.06);
+                opts.unknown_space = unknown_space;
+                let occupancy = Occupancy::build(scan, &level(), 1.0, &opts);
+                occupancy.is_free(0.5, 0.5, 0.0);
             }
         }
     }

@@ -904,6 +904,45 @@ mod tests {
     }
 
     #[test]
+    fn corridor_walls_keep_the_disk_a_radius_away_at_any_heading() {
+        // The benchmark's corridor and end wall, at headings that put the bins at different
+        // offsets from the beams, for a small robot and a large one (long walks).
+        let scene = crate::scene::Scene::corridor(2.5, 20.0).wall(2.5, -1.25, 2.5, 1.25);
+        let lidar = crate::scene::Lidar {
+            beams: 360,
+            range_min: 0.02,
+            range_max: 3.0,
+        };
+        let position = nalgebra::Vector2::new(0.0, 0.3);
+        for heading in [0.0, 0.3, 1.234, -2.9] {
+            let attitude = UnitQuaternion::from_euler_angles(0.0, 0.0, heading);
+            let scan = scene.scan(position, &attitude, &lidar);
+            for radius in [0.06, 0.3] {
+                let occupancy = Occupancy::build(&scan, &attitude, 1.0, &options(radius));
+                let mut free = 0;
+                for i in 0..240 {
+                    for j in 0..240 {
+                        let (x, y) = (-3.0 + i as f64 * 0.025, -3.0 + j as f64 * 0.025);
+                        if occupancy.is_free(x as f32, y as f32, 0.0) {
+                            free += 1;
+                            let at = position + nalgebra::Vector2::new(x, y);
+                            let clearance = scene.clearance(at);
+                            assert!(
+                                clearance >= 0.97 * radius,
+                                "heading {heading}, radius {radius}: ({x}, {y}) {clearance} m"
+                            );
+                        }
+                    }
+                }
+                assert!(
+                    free > 2000,
+                    "heading {heading}, radius {radius}: {free} free"
+                );
+            }
+        }
+    }
+
+    #[test]
     fn absurd_scans_build_without_panicking_or_stalling() {
         let huge = Scan {
             range_max: f64::MAX,

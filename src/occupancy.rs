@@ -133,7 +133,7 @@ pub struct OccupancyOptions {
 const BINS: usize = 720;
 const BIN_WIDTH: f64 = 2.0 * PI / BINS as f64;
 const BINS_PER_RADIAN: f64 = BINS as f64 / (2.0 * PI);
-/// Bins one step of a walk in [`inflate_point`] handles: a fixed-width, branch-free inner loop
+/// Bins one step of a walk in [`inflate_points`] handles: a fixed-width, branch-free inner loop
 /// that compiles to SIMD.
 const LANES: usize = 8;
 /// The most bins a walk from a point needs: a disk seen from outside spans at most a half

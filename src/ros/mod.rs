@@ -6,6 +6,7 @@
 //! validates them, and writes `cstep_msgs` results.
 
 pub mod args;
+pub mod context;
 pub mod convert;
 pub mod messages;
 pub mod node;

@@ -7,7 +7,6 @@
 //! configured seed, so identical requests get identical answers. Diagnostics report input ages,
 //! counts of skipped, stale and rejected inputs, and the last score, once a second.
 
-use std::net::Ipv4Addr;
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Condvar, Mutex};
@@ -15,14 +14,14 @@ use std::time::{Duration, Instant};
 
 use futures::StreamExt;
 use nalgebra::Vector3;
-use ros2_client::dds::rustdds::DomainParticipantBuilder;
 use ros2_client::qos::{Durability, History, WhenFull};
 use ros2_client::{
-    Context, MessageTypeName, Name, Node, NodeName, NodeOptions, ParameterValue, Publisher,
-    QosProfile, ServiceMapping, ServiceTypeName,
+    MessageTypeName, Name, Node, NodeName, NodeOptions, ParameterValue, Publisher, QosProfile,
+    ServiceMapping, ServiceTypeName,
 };
 
 use super::args::RosArgs;
+use super::context::{context_from_env, resolve};
 use super::convert::{empowerment_message, laser_scan_to_scan, odometry_to_state, reward_message};
 use super::messages::{
     DiagnosticArray, DiagnosticStatus, EmpoweredReward, Empowerment, EvaluateRequest,
@@ -55,7 +54,7 @@ pub fn run(config: &[PathBuf], ros_args: &RosArgs) -> Result<(), String> {
         stopping: AtomicBool::new(false),
     });
 
-    let context = dds_context()?;
+    let context = context_from_env()?;
     let namespace = ros_args.namespace.as_deref().unwrap_or("/");
     let options = parameter_options(&shared, &settings);
     let mut node = context
@@ -222,43 +221,9 @@ impl Ports {
     }
 }
 
-/// The absolute form of a topic or service name: relative names live in the node's namespace.
-/// (ros2-client's own resolution writes `rt//scan` for the root namespace.)
-fn resolve(namespace: &str, name: &str) -> String {
-    if name.starts_with('/') {
-        name.to_owned()
-    } else {
-        format!("{}/{name}", namespace.trim_end_matches('/'))
-    }
-}
-
 /// An error mapper for creating the named entity.
 fn failed<E: std::fmt::Debug>(what: &'static str) -> impl FnOnce(E) -> String {
     move |e| format!("cannot create {what}: {e:?}")
-}
-
-/// A DDS context for `ROS_DOMAIN_ID`, localhost-only when the ROS variables ask for it
-/// (ros2-client reads neither by itself).
-fn dds_context() -> Result<Context, String> {
-    let domain = match std::env::var("ROS_DOMAIN_ID") {
-        Ok(text) if !text.trim().is_empty() => text
-            .trim()
-            .parse::<u16>()
-            .ok()
-            .filter(|d| *d <= 232)
-            .ok_or_else(|| format!("ROS_DOMAIN_ID must be 0–232, got \"{text}\""))?,
-        _ => 0,
-    };
-    let localhost = std::env::var("ROS_AUTOMATIC_DISCOVERY_RANGE").is_ok_and(|v| v == "LOCALHOST")
-        || std::env::var("ROS_LOCALHOST_ONLY").is_ok_and(|v| v == "1");
-    let mut builder = DomainParticipantBuilder::new(domain);
-    if localhost {
-        builder = builder.with_only_networks([Ipv4Addr::LOCALHOST]);
-    }
-    let participant = builder
-        .build()
-        .map_err(|e| format!("cannot join DDS domain {domain}: {e:?}"))?;
-    Context::from_domain_participant(participant).map_err(|e| format!("ROS context: {e:?}"))
 }
 
 /// Declares the live parameter: a `safety_coefficient` change takes effect at the next score.

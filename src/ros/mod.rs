@@ -8,5 +8,6 @@
 pub mod args;
 pub mod context;
 pub mod convert;
+pub mod markers;
 pub mod messages;
 pub mod node;

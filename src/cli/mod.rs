@@ -1,6 +1,7 @@
 //! Command-line interface: one file per subcommand.
 
 mod bench;
+mod echo;
 mod eval;
 mod node;
 
@@ -20,6 +21,8 @@ enum Command {
     Eval(eval::EvalArgs),
     /// Run the ROS 2 node: odometry and scans in, empowerment and rewards out.
     Node(node::NodeArgs),
+    /// Print a topic's messages as YAML documents, like `ros2 topic echo`.
+    Echo(echo::EchoArgs),
     /// Measure evaluation speed on a fixed scene (one core unless --threads says otherwise).
     Bench(bench::BenchArgs),
 }
@@ -30,6 +33,7 @@ pub fn run(cli: Cli) -> Result<(), String> {
         Command::Eval(args) => eval::run(args),
         Command::Bench(args) => bench::run(args),
         Command::Node(args) => node::run(args),
+        Command::Echo(args) => echo::run(args),
     }
 }
 

@@ -8,6 +8,8 @@
 pub mod args;
 pub mod context;
 pub mod convert;
+pub mod echo;
 pub mod markers;
 pub mod messages;
 pub mod node;
+pub mod yaml;

@@ -186,7 +186,12 @@ pub fn echo(options: &EchoOptions, out: &mut dyn Write) -> Result<(), String> {
         return Err("--count must be at least 1".into());
     }
     let topic = resolve("/", options.topic.trim());
-    Name::parse(&topic).map_err(|e| format!("topic name \"{}\": {e:?}", options.topic))?;
+    Name::parse(&topic).map_err(|e| {
+        format!(
+            "topic name \"{}\" is not a valid ROS name ({e:?})",
+            options.topic
+        )
+    })?;
     let given = options
         .type_name
         .as_deref()

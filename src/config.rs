@@ -457,6 +457,8 @@ pub struct NodeSettings {
     pub empowerment_topic: String,
     /// `cstep_msgs/EmpoweredReward` output.
     pub reward_topic: String,
+    /// `visualization_msgs/MarkerArray` output (published only while subscribed).
+    pub markers_topic: String,
     /// `cstep_msgs/srv/Evaluate` service.
     pub evaluate_service: String,
     /// Odometry older than this when a scan arrives is stale, seconds.
@@ -466,12 +468,13 @@ pub struct NodeSettings {
 }
 
 /// The parameter names [`NodeSettings`] owns.
-pub const NODE_PARAMETERS: [&str; 8] = [
+pub const NODE_PARAMETERS: [&str; 9] = [
     "odom_topic",
     "scan_topic",
     "goal_topic",
     "empowerment_topic",
     "reward_topic",
+    "markers_topic",
     "evaluate_service",
     "input_timeout",
     "use_sim_time",
@@ -495,6 +498,7 @@ impl NodeSettings {
         let goal_topic = name("goal_topic")?;
         let empowerment_topic = name("empowerment_topic")?;
         let reward_topic = name("reward_topic")?;
+        let markers_topic = name("markers_topic")?;
         let evaluate_service = name("evaluate_service")?;
         let input_timeout = required("input_timeout", positive(set, "input_timeout")?)?;
         let use_sim_time = match set.take("use_sim_time") {
@@ -513,6 +517,7 @@ impl NodeSettings {
             goal_topic,
             empowerment_topic,
             reward_topic,
+            markers_topic,
             evaluate_service,
             input_timeout,
             use_sim_time,

@@ -14,8 +14,9 @@ use std::path::Path;
 use approx::assert_relative_eq;
 use byteorder::LittleEndian;
 use cstep::ros::messages::{
-    DiagnosticArray, EmpoweredReward, Empowerment, EvaluateRequest, EvaluateResponse, Header,
-    LaserScan, Odometry, Point, PoseStamped, Time,
+    ColorRGBA, CompressedImage, DiagnosticArray, Duration, EmpoweredReward, Empowerment,
+    EvaluateRequest, EvaluateResponse, Header, LaserScan, Marker, MarkerArray, MeshFile, Odometry,
+    Point, Pose, PoseStamped, Quaternion, Time, UVCoordinate, Vector3,
 };
 use serde::de::DeserializeOwned;
 use serde::Serialize;
@@ -24,7 +25,7 @@ use serde::Serialize;
 const CDR_LE: [u8; 4] = [0x00, 0x01, 0x00, 0x00];
 
 /// Every fixture file; `every_fixture_file_is_tested` keeps this list complete.
-const FIXTURES: [&str; 10] = [
+const FIXTURES: [&str; 11] = [
     "diagnostic_array",
     "empowered_reward",
     "empowerment",
@@ -33,6 +34,7 @@ const FIXTURES: [&str; 10] = [
     "header",
     "laser_scan",
     "laser_scan_empty",
+    "marker_array",
     "odometry",
     "pose_stamped",
 ];
@@ -296,5 +298,109 @@ fn messages_built_in_rust_encode_to_rclpy_bytes() {
     assert_eq!(
         cdr_encoding::to_vec::<_, LittleEndian>(&response).unwrap(),
         body("evaluate_response")
+    );
+}
+
+/// `rgba` as rclpy stores it: float32 channels.
+fn color(r: f64, g: f64, b: f64, a: f64) -> ColorRGBA {
+    ColorRGBA {
+        r: r as f32,
+        g: g as f32,
+        b: b as f32,
+        a: a as f32,
+    }
+}
+
+#[test]
+fn marker_array_with_every_humble_field_round_trips_and_builds_from_rust() {
+    // Built here field by field, as `generate.py` builds it: equal after decoding, and the same
+    // bytes when encoded, so every Marker field sits where RViz (rclpy, Fast DDS) expects it.
+    let points = Marker {
+        header: header(42, 499_000_000, "odom"),
+        ns: "cstep/endpoints".into(),
+        id: 0,
+        kind: Marker::POINTS,
+        action: Marker::ADD,
+        scale: Vector3 {
+            x: 0.05,
+            y: 0.05,
+            z: 0.0,
+        },
+        color: color(0.1, 0.8, 0.1, 1.0),
+        lifetime: Duration {
+            sec: 0,
+            nanosec: 500_000_000,
+        },
+        points: vec![
+            Point {
+                x: 1.25,
+                y: -0.5,
+                z: 1.0,
+            },
+            Point {
+                x: -2.0,
+                y: 0.75,
+                z: 1.125,
+            },
+        ],
+        colors: vec![color(0.1, 0.8, 0.1, 1.0), color(0.9, 0.1, 0.1, 1.0)],
+        ..Default::default()
+    };
+    let everything = Marker {
+        header: header(-3, 7, "base"),
+        ns: "all".into(),
+        id: -17,
+        kind: 11, // TRIANGLE_LIST
+        action: Marker::DELETEALL,
+        pose: Pose {
+            position: Point {
+                x: 3.0,
+                y: 0.0,
+                z: 0.0,
+            },
+            orientation: Quaternion {
+                x: 0.0,
+                y: 0.0,
+                z: 0.0,
+                w: 0.5,
+            },
+        },
+        scale: Vector3 {
+            x: 0.0,
+            y: 0.0,
+            z: 2.5,
+        },
+        color: color(0.2, 0.5, 1.0, 0.25),
+        lifetime: Duration { sec: 2, nanosec: 1 },
+        frame_locked: true,
+        points: vec![Point {
+            x: 0.5,
+            y: 0.25,
+            z: -1.0,
+        }],
+        colors: vec![],
+        texture_resource: "file://t.png".into(),
+        texture: CompressedImage {
+            header: header(1, 2, "cam"),
+            format: "png".into(),
+            data: vec![137, 80, 78],
+        },
+        uv_coordinates: vec![UVCoordinate { u: 0.25, v: 0.75 }],
+        text: "hi".into(),
+        mesh_resource: "package://m.dae".into(),
+        mesh_file: MeshFile {
+            filename: "m.stl".into(),
+            data: vec![1, 2, 3, 4, 5],
+        },
+        mesh_use_embedded_materials: true,
+    };
+    let built = MarkerArray {
+        markers: vec![points, everything],
+    };
+    let decoded: MarkerArray = decode("marker_array");
+    assert_eq!(decoded, built);
+    assert_eq!(
+        cdr_encoding::to_vec::<_, LittleEndian>(&built).unwrap(),
+        body("marker_array")
     );
 }

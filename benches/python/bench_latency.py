@@ -24,8 +24,8 @@ from rclpy.qos import QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "tests" / "python"))
 from nav_msgs.msg import Odometry
+from node_rig import CONFIG, corridor_scan, cstep_binary, odometry
 from sensor_msgs.msg import LaserScan
-from test_node import CONFIG, corridor_scan, cstep_binary, odometry
 
 
 def quantile(values: list[float], q: float) -> float:

@@ -13,11 +13,11 @@ use ros2_client::{MessageTypeName, Name, NodeName, NodeOptions, QosProfile};
 use cstep::arena::{Arena, Flight};
 use cstep::plot::{flight_svg, FlightSample};
 use cstep::ros::args::RosArgs;
+use cstep::ros::context::context_from_env;
 use cstep::ros::convert::scan_to_laser_scan;
 use cstep::ros::messages::{
     EmpoweredReward, Empowerment, Header, LaserScan, Odometry, PoseStamped, Time,
 };
-use cstep::ros::node::dds_context;
 use cstep::scene::Lidar;
 
 use super::node::stop_on_ctrl_c;
@@ -48,9 +48,6 @@ pub fn run(args: DemoArgs) -> Result<(), String> {
     std::env::set_var("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST");
     if std::env::var_os("ROS_DOMAIN_ID").is_none() {
         std::env::set_var("ROS_DOMAIN_ID", (1 + std::process::id() % 100).to_string());
-    }
-    if std::env::var_os("ROS_DISTRO").is_none() {
-        std::env::set_var("ROS_DISTRO", "jazzy");
     }
     let stop = stop_on_ctrl_c()?;
     let node_stop = stop.clone();
@@ -91,7 +88,7 @@ struct Scored {
 
 /// Flies the drone: publishes odometry and scans at 10 Hz and collects the node's answers.
 fn fly(args: &DemoArgs, stop: &std::sync::atomic::AtomicBool) -> Result<Vec<Scored>, String> {
-    let context = dds_context()?;
+    let context = context_from_env()?;
     let mut node = context
         .new_node(
             NodeName::new("/", "cstep_demo_drone").map_err(|e| format!("{e:?}"))?,

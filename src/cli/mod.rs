@@ -2,6 +2,7 @@
 
 mod bench;
 mod demo;
+mod echo;
 mod eval;
 mod node;
 
@@ -23,6 +24,8 @@ enum Command {
     Demo(demo::DemoArgs),
     /// Run the ROS 2 node: odometry and scans in, empowerment and rewards out.
     Node(node::NodeArgs),
+    /// Print a topic's messages as YAML documents, like `ros2 topic echo`.
+    Echo(echo::EchoArgs),
     /// Measure evaluation speed on a fixed scene (one core unless --threads says otherwise).
     Bench(bench::BenchArgs),
 }
@@ -34,6 +37,7 @@ pub fn run(cli: Cli) -> Result<(), String> {
         Command::Bench(args) => bench::run(args),
         Command::Node(args) => node::run(args),
         Command::Demo(args) => demo::run(args),
+        Command::Echo(args) => echo::run(args),
     }
 }
 

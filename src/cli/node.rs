@@ -31,10 +31,6 @@ pub fn run(args: NodeArgs) -> Result<(), String> {
         }
     }
     let ros_args = RosArgs::parse(&args.ros_args)?;
-    if std::env::var_os("ROS_DISTRO").is_none() {
-        // ros2-client warns at start-up without it; cstep speaks Jazzy.
-        std::env::set_var("ROS_DISTRO", "jazzy");
-    }
     cstep::ros::node::run(args.config.as_slice(), &ros_args, stop_on_ctrl_c()?)
 }
 

@@ -297,6 +297,146 @@ pub struct DiagnosticArray {
     pub status: Vec<DiagnosticStatus>,
 }
 
+/// `builtin_interfaces/Duration`.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct Duration {
+    /// Seconds.
+    pub sec: i32,
+    /// Nanoseconds within the second.
+    pub nanosec: u32,
+}
+
+impl Duration {
+    /// The duration closest to `seconds` (non-negative, finite; anything else reads as zero).
+    pub fn from_seconds(seconds: f64) -> Self {
+        if !(seconds.is_finite() && seconds > 0.0) {
+            return Self::default();
+        }
+        let whole = seconds.floor().min(i32::MAX as f64);
+        let nanosec = ((seconds - whole) * 1e9).round().min(999_999_999.0) as u32;
+        Self {
+            sec: whole as i32,
+            nanosec,
+        }
+    }
+}
+
+/// `std_msgs/ColorRGBA`, each channel 0–1.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct ColorRGBA {
+    /// Red.
+    pub r: f32,
+    /// Green.
+    pub g: f32,
+    /// Blue.
+    pub b: f32,
+    /// Opacity.
+    pub a: f32,
+}
+
+/// `sensor_msgs/CompressedImage` (a marker's texture).
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct CompressedImage {
+    /// Acquisition time and frame.
+    pub header: Header,
+    /// Image format ("jpeg", "png", …).
+    pub format: String,
+    /// The compressed image bytes.
+    pub data: Vec<u8>,
+}
+
+/// `visualization_msgs/UVCoordinate`: a texture coordinate.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct UVCoordinate {
+    /// Horizontal texture coordinate.
+    pub u: f32,
+    /// Vertical texture coordinate.
+    pub v: f32,
+}
+
+/// `visualization_msgs/MeshFile`: a mesh sent inline.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct MeshFile {
+    /// The file name, whose extension tells the format.
+    pub filename: String,
+    /// The file's bytes.
+    pub data: Vec<u8>,
+}
+
+/// `visualization_msgs/Marker` with every field of ROS 2 Humble and later, in `.msg` order
+/// (RViz cannot decode a marker without the texture and mesh-file fields).
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct Marker {
+    /// Stamp and the frame the pose and points are in.
+    pub header: Header,
+    /// Namespace: with `id`, names the marker.
+    pub ns: String,
+    /// Identifier within `ns`.
+    pub id: i32,
+    /// Shape, one of the `Marker::` type constants.
+    #[serde(rename = "type")]
+    pub kind: i32,
+    /// [`Marker::ADD`], [`Marker::DELETE`] or [`Marker::DELETEALL`].
+    pub action: i32,
+    /// Pose of the marker (of the points' frame, for point and line types).
+    pub pose: Pose,
+    /// Size; for points the point width and height, for lines the line width (x).
+    pub scale: Vector3,
+    /// Colour of the whole marker (points and lines use `colors` when it is not empty).
+    pub color: ColorRGBA,
+    /// How long the marker lives; zero is forever.
+    pub lifetime: Duration,
+    /// Whether the marker follows its frame as it moves.
+    pub frame_locked: bool,
+    /// Points of point, line and list types.
+    pub points: Vec<Point>,
+    /// Per-point colours (empty, or as many as `points`).
+    pub colors: Vec<ColorRGBA>,
+    /// Texture file (URI), for mesh and triangle types.
+    pub texture_resource: String,
+    /// Inline texture.
+    pub texture: CompressedImage,
+    /// Texture coordinates, one per point.
+    pub uv_coordinates: Vec<UVCoordinate>,
+    /// Text of `TEXT_VIEW_FACING` markers.
+    pub text: String,
+    /// Mesh file (URI) of `MESH_RESOURCE` markers.
+    pub mesh_resource: String,
+    /// Inline mesh.
+    pub mesh_file: MeshFile,
+    /// Whether a mesh uses its own materials.
+    pub mesh_use_embedded_materials: bool,
+}
+
+impl Marker {
+    /// Connected line through `points`.
+    pub const LINE_STRIP: i32 = 4;
+    /// A sphere at each of `points`.
+    pub const SPHERE_LIST: i32 = 7;
+    /// A square dot at each of `points`.
+    pub const POINTS: i32 = 8;
+    /// Add or replace the marker `ns`/`id`.
+    pub const ADD: i32 = 0;
+    /// Remove the marker `ns`/`id`.
+    pub const DELETE: i32 = 2;
+    /// Remove every marker (of `ns`, when set).
+    pub const DELETEALL: i32 = 3;
+}
+
+/// `visualization_msgs/MarkerArray`.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct MarkerArray {
+    /// The markers, applied in order.
+    pub markers: Vec<Marker>,
+}
+
 /// Every type here travels over DDS with ros2-client.
 macro_rules! ros_messages {
     ($($t:ty),*) => { $(impl ros2_client::Message for $t {})* };
@@ -309,7 +449,8 @@ ros_messages!(
     EmpoweredReward,
     EvaluateRequest,
     EvaluateResponse,
-    DiagnosticArray
+    DiagnosticArray,
+    MarkerArray
 );
 
 /// Float arrays that read JSON's stand-ins for non-finite numbers and pass binary formats

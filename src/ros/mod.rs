@@ -6,6 +6,10 @@
 //! validates them, and writes `cstep_msgs` results.
 
 pub mod args;
+pub mod context;
 pub mod convert;
+pub mod echo;
+pub mod markers;
 pub mod messages;
 pub mod node;
+pub mod yaml;

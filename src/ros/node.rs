@@ -6,8 +6,10 @@
 //! counted as skipped. The `/cstep/evaluate` service scores a given state synchronously with the
 //! configured seed, so identical requests get identical answers. Diagnostics report input ages,
 //! counts of skipped, stale and rejected inputs, and the last score, once a second.
+//! `/cstep/markers` (the sampled endpoints and their hull, [`super::markers`]) is built and
+//! published after each score only while a subscriber is matched; nobody listening costs the
+//! scoring path one atomic load.
 
-use std::net::Ipv4Addr;
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::{Arc, Condvar, Mutex};
@@ -15,18 +17,19 @@ use std::time::{Duration, Instant};
 
 use futures::StreamExt;
 use nalgebra::Vector3;
-use ros2_client::dds::rustdds::DomainParticipantBuilder;
 use ros2_client::qos::{Durability, History, WhenFull};
 use ros2_client::{
-    Context, MessageTypeName, Name, Node, NodeName, NodeOptions, ParameterValue, Publisher,
-    QosProfile, ServiceMapping, ServiceTypeName,
+    MessageTypeName, Name, Node, NodeName, NodeOptions, ParameterValue, Publisher, QosProfile,
+    ServiceMapping, ServiceTypeName,
 };
 
 use super::args::RosArgs;
+use super::context::{context_from_env, resolve};
 use super::convert::{empowerment_message, laser_scan_to_scan, odometry_to_state, reward_message};
+use super::markers::rollout_markers;
 use super::messages::{
     DiagnosticArray, DiagnosticStatus, EmpoweredReward, Empowerment, EvaluateRequest,
-    EvaluateResponse, Header, KeyValue, LaserScan, Odometry, PoseStamped,
+    EvaluateResponse, Header, KeyValue, LaserScan, MarkerArray, Odometry, PoseStamped,
 };
 use crate::config::{load_all, NodeSettings, DEFAULT_NODE_NAME};
 use crate::estimator::Estimator;
@@ -53,9 +56,10 @@ pub fn run(config: &[PathBuf], ros_args: &RosArgs, stop: Arc<AtomicBool>) -> Res
         mailbox: Mutex::new(None),
         arrived: Condvar::new(),
         stopping: stop,
+        markers_wanted: AtomicBool::new(false),
     });
 
-    let context = dds_context()?;
+    let context = context_from_env()?;
     let namespace = ros_args.namespace.as_deref().unwrap_or("/");
     let options = parameter_options(&shared, &settings);
     let mut node = context
@@ -66,26 +70,32 @@ pub fn run(config: &[PathBuf], ros_args: &RosArgs, stop: Arc<AtomicBool>) -> Res
         .map_err(|e| format!("cannot create the node: {e:?}"))?;
     let ports = Ports::open(&mut node, &interface, ros_args, namespace)?;
     eprintln!(
-        "cstep node {} on ROS_DOMAIN_ID {}: {} + {} -> {}, {}; service {}",
+        "cstep node {} on ROS_DOMAIN_ID {}: {} + {} -> {}, {} (markers on {} while subscribed); \
+         service {}",
         node.fully_qualified_name(),
         context.domain_id(),
         ros_args.remap(&interface.odom_topic),
         ros_args.remap(&interface.scan_topic),
         ros_args.remap(&interface.empowerment_topic),
         ros_args.remap(&interface.reward_topic),
+        ros_args.remap(&interface.markers_topic),
         ros_args.remap(&interface.evaluate_service),
     );
 
     let worker = {
         let shared = shared.clone();
-        let (empowerment, reward) = (ports.empowerment.clone(), ports.reward.clone());
-        std::thread::spawn(move || score_scans(&shared, &empowerment, &reward))
+        let outputs = Outputs {
+            empowerment: ports.empowerment.clone(),
+            reward: ports.reward.clone(),
+            markers: ports.markers.clone(),
+        };
+        std::thread::spawn(move || score_scans(&shared, &outputs))
     };
     let executor = smol::LocalExecutor::new();
     executor
         .spawn(node.spinner().map_err(|e| format!("{e:?}"))?.spin())
         .detach();
-    smol::block_on(executor.run(serve(&shared, &ports)));
+    smol::block_on(executor.run(serve(&shared, &ports, &node)));
     shared.arrived.notify_all();
     worker
         .join()
@@ -104,6 +114,8 @@ struct Shared {
     mailbox: Mutex<Option<(LaserScan, Instant)>>,
     arrived: Condvar,
     stopping: Arc<AtomicBool>,
+    /// Whether `/cstep/markers` has a matched subscriber (polled on the DDS side).
+    markers_wanted: AtomicBool,
 }
 
 /// Newest inputs and running counts, for scoring and diagnostics.
@@ -117,6 +129,7 @@ struct Latest {
     skipped: u64,
     stale: u64,
     rejected: u64,
+    markers_published: u64,
     last_problem: Option<String>,
 }
 
@@ -127,6 +140,7 @@ struct Ports {
     goal: ros2_client::Subscription<PoseStamped>,
     empowerment: Arc<Publisher<Empowerment>>,
     reward: Arc<Publisher<EmpoweredReward>>,
+    markers: Arc<Publisher<MarkerArray>>,
     diagnostics: Publisher<DiagnosticArray>,
     evaluate: ros2_client::Server<EvaluateRequest, EvaluateResponse>,
 }
@@ -173,6 +187,12 @@ impl Ports {
             "EmpoweredReward",
             &reliable,
         )?;
+        let markers_topic = topic(
+            &interface.markers_topic,
+            "visualization_msgs",
+            "MarkerArray",
+            &reliable,
+        )?;
         let diagnostics_topic = topic(
             "/diagnostics",
             "diagnostic_msgs",
@@ -198,6 +218,10 @@ impl Ports {
                 node.create_publisher(&reward_topic, Some(reliable.clone()))
                     .map_err(failed("the reward publisher"))?,
             ),
+            markers: Arc::new(
+                node.create_publisher(&markers_topic, Some(reliable.clone()))
+                    .map_err(failed("the markers publisher"))?,
+            ),
             diagnostics: node
                 .create_publisher(&diagnostics_topic, Some(reliable.clone()))
                 .map_err(failed("the diagnostics publisher"))?,
@@ -215,43 +239,9 @@ impl Ports {
     }
 }
 
-/// The absolute form of a topic or service name: relative names live in the node's namespace.
-/// (ros2-client's own resolution writes `rt//scan` for the root namespace.)
-pub fn resolve(namespace: &str, name: &str) -> String {
-    if name.starts_with('/') {
-        name.to_owned()
-    } else {
-        format!("{}/{name}", namespace.trim_end_matches('/'))
-    }
-}
-
 /// An error mapper for creating the named entity.
 fn failed<E: std::fmt::Debug>(what: &'static str) -> impl FnOnce(E) -> String {
     move |e| format!("cannot create {what}: {e:?}")
-}
-
-/// A DDS context for `ROS_DOMAIN_ID`, localhost-only when the ROS variables ask for it
-/// (ros2-client reads neither by itself).
-pub fn dds_context() -> Result<Context, String> {
-    let domain = match std::env::var("ROS_DOMAIN_ID") {
-        Ok(text) if !text.trim().is_empty() => text
-            .trim()
-            .parse::<u16>()
-            .ok()
-            .filter(|d| *d <= 232)
-            .ok_or_else(|| format!("ROS_DOMAIN_ID must be 0–232, got \"{text}\""))?,
-        _ => 0,
-    };
-    let localhost = std::env::var("ROS_AUTOMATIC_DISCOVERY_RANGE").is_ok_and(|v| v == "LOCALHOST")
-        || std::env::var("ROS_LOCALHOST_ONLY").is_ok_and(|v| v == "1");
-    let mut builder = DomainParticipantBuilder::new(domain);
-    if localhost {
-        builder = builder.with_only_networks([Ipv4Addr::LOCALHOST]);
-    }
-    let participant = builder
-        .build()
-        .map_err(|e| format!("cannot join DDS domain {domain}: {e:?}"))?;
-    Context::from_domain_participant(participant).map_err(|e| format!("ROS context: {e:?}"))
 }
 
 /// Declares the live parameter: a `safety_coefficient` change takes effect at the next score.
@@ -286,8 +276,8 @@ fn parameter_options(shared: &Arc<Shared>, settings: &crate::config::Settings) -
 }
 
 /// The DDS-side tasks: keep the newest odometry and goal, post scans, answer the service,
-/// publish diagnostics; returns when Ctrl-C was pressed.
-async fn serve(shared: &Arc<Shared>, ports: &Ports) {
+/// publish diagnostics, watch for marker subscribers; returns when Ctrl-C was pressed.
+async fn serve(shared: &Arc<Shared>, ports: &Ports, node: &Node) {
     let odometry = ports.odom.async_stream().for_each(|received| async move {
         if let Ok((odom, _)) = received {
             shared.latest().odom = Some((odom, Instant::now()));
@@ -330,6 +320,14 @@ async fn serve(shared: &Arc<Shared>, ports: &Ports) {
             let _ = ports.diagnostics.publish(shared.diagnostics());
         }
     };
+    let marker_subscribers = async {
+        loop {
+            // Matched readers of the markers writer, as the spinner records DDS matching.
+            let wanted = ports.markers.get_subscription_count(node) > 0;
+            shared.markers_wanted.store(wanted, Ordering::Relaxed);
+            smol::Timer::after(MARKER_SUBSCRIBER_POLL).await;
+        }
+    };
     let stopped = async {
         while !shared.stopping.load(Ordering::SeqCst) {
             smol::Timer::after(Duration::from_millis(50)).await;
@@ -341,17 +339,25 @@ async fn serve(shared: &Arc<Shared>, ports: &Ports) {
         Box::pin(scans),
         Box::pin(service),
         Box::pin(diagnostics),
+        Box::pin(marker_subscribers),
         Box::pin(stopped),
     ])
     .await;
 }
 
-/// The scoring thread: waits for a scan, scores it against the newest odometry, publishes.
-fn score_scans(
-    shared: &Shared,
-    empowerment: &Publisher<Empowerment>,
-    reward: &Publisher<EmpoweredReward>,
-) {
+/// How often the node checks whether `/cstep/markers` has subscribers.
+const MARKER_SUBSCRIBER_POLL: Duration = Duration::from_millis(100);
+
+/// What the scoring thread publishes to.
+struct Outputs {
+    empowerment: Arc<Publisher<Empowerment>>,
+    reward: Arc<Publisher<EmpoweredReward>>,
+    markers: Arc<Publisher<MarkerArray>>,
+}
+
+/// The scoring thread: waits for a scan, scores it against the newest odometry, publishes the
+/// score, then the markers if someone subscribes to them.
+fn score_scans(shared: &Shared, outputs: &Outputs) {
     loop {
         let (scan, _) = {
             let mut mailbox = shared.mailbox.lock().unwrap_or_else(|e| e.into_inner());
@@ -379,11 +385,19 @@ fn score_scans(
             continue;
         }
         let goal = shared.latest().goal;
-        match shared.score(&odom, &scan, goal) {
-            Ok((e, r)) => {
+        let with_markers = shared.markers_wanted.load(Ordering::Relaxed);
+        match shared.score(&odom, &scan, goal, with_markers) {
+            Ok((e, r, markers)) => {
                 // A full queue or a lost subscriber is not the node's failure; diagnostics show it.
-                if empowerment.publish(e).is_err() || reward.publish(r).is_err() {
+                if outputs.empowerment.publish(e).is_err() || outputs.reward.publish(r).is_err() {
                     shared.note_problem(|_| {}, "publishing a score failed");
+                }
+                if let Some(markers) = markers {
+                    if outputs.markers.publish(markers).is_ok() {
+                        shared.latest().markers_published += 1;
+                    } else {
+                        shared.note_problem(|_| {}, "publishing markers failed");
+                    }
                 }
             }
             Err(problem) => shared.note_problem(|l| l.rejected += 1, &problem),
@@ -402,13 +416,15 @@ impl Shared {
         latest.last_problem = Some(problem.to_owned());
     }
 
-    /// Scores one odometry and scan pair; a malformed input is an error naming the field.
+    /// Scores one odometry and scan pair, with the markers of the evaluation if asked; a
+    /// malformed input is an error naming the field.
     fn score(
         &self,
         odom: &Odometry,
         scan: &LaserScan,
         goal: Option<Vector3<f64>>,
-    ) -> Result<(Empowerment, EmpoweredReward), String> {
+        with_markers: bool,
+    ) -> Result<(Empowerment, EmpoweredReward, Option<MarkerArray>), String> {
         let state = odometry_to_state(odom).map_err(|e| format!("odometry: {e}"))?;
         let scan_in = laser_scan_to_scan(scan).map_err(|e| format!("scan: {e}"))?;
         let estimate = self.estimator.evaluate(&state, &scan_in);
@@ -425,12 +441,23 @@ impl Shared {
             stamp: scan.header.stamp,
             frame_id: odom.header.frame_id.clone(),
         };
-        let mut latest = self.latest();
-        latest.scored += 1;
-        latest.last_score = Some((estimate.empowerment, estimate.valid(), estimate.elapsed));
+        {
+            let mut latest = self.latest();
+            latest.scored += 1;
+            latest.last_score = Some((estimate.empowerment, estimate.valid(), estimate.elapsed));
+        }
+        let markers = with_markers.then(|| {
+            rollout_markers(
+                &header,
+                &state.position,
+                &estimate.rollout,
+                self.timeout.as_secs_f64(),
+            )
+        });
         Ok((
             empowerment_message(header.clone(), &estimate, c),
             reward_message(header, &reward, c, estimate.valid()),
+            markers,
         ))
     }
 
@@ -439,8 +466,8 @@ impl Shared {
         let goal = request
             .has_goal
             .then(|| Vector3::new(request.goal.x, request.goal.y, request.goal.z));
-        match self.score(&request.odom, &request.scan, goal) {
-            Ok((empowerment, reward)) => EvaluateResponse {
+        match self.score(&request.odom, &request.scan, goal, false) {
+            Ok((empowerment, reward, _)) => EvaluateResponse {
                 empowerment,
                 reward,
             },
@@ -512,6 +539,7 @@ impl Shared {
             ("scans_skipped", latest.skipped.to_string()),
             ("scans_stale", latest.stale.to_string()),
             ("inputs_rejected", latest.rejected.to_string()),
+            ("markers_published", latest.markers_published.to_string()),
         ];
         DiagnosticArray {
             header: Header::default(),

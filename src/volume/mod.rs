@@ -38,6 +38,13 @@ mod union;
 use hull::{efron_factor, Polygon, Polyhedron};
 use neighbours::NeighbourGrid;
 
+/// Counter-clockwise vertices of the convex hull of the points' `x, y` coordinates — the
+/// outline of a planar reachable set, as `/cstep/markers` draws it; `None` when the points span
+/// no area (the same degenerate cases as the volumes). Non-finite points must be dropped first.
+pub fn planar_hull(points: &[[f64; 3]]) -> Option<Vec<[f64; 2]>> {
+    Polygon::hull(points).map(|polygon| polygon.vertices().to_vec())
+}
+
 /// Dimension in which volumes are measured: areas of (x, y) for robots flying at a fixed
 /// altitude (the paper's drone experiment), volumes of (x, y, z) otherwise.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]

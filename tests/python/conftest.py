@@ -31,6 +31,9 @@ sys.path.insert(0, str(REPO / "py_bridge"))
 _BASE = int(os.environ.get("CSTEP_TEST_DOMAIN_BASE", os.getpid() % 100))
 _DOMAINS = (1 + (_BASE + i) % 100 for i in itertools.count())
 
+# The live-node rig (`cstep_node` and `rig` fixtures) lives in node_rig.py.
+pytest_plugins = ("node_rig",)
+
 # How long to wait for discovery and replies before a test fails (discovery takes 1-4 s).
 DISCOVERY_TIMEOUT_S = 20.0
 

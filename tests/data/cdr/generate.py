@@ -23,7 +23,7 @@ import struct
 import sys
 from pathlib import Path
 
-from builtin_interfaces.msg import Time
+from builtin_interfaces.msg import Duration, Time
 from cstep_msgs.msg import EmpoweredReward, Empowerment
 from cstep_msgs.srv import Evaluate
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
@@ -38,8 +38,9 @@ from rosidl_parser.definition import (
     BasicType,
     NamespacedType,
 )
-from sensor_msgs.msg import LaserScan
-from std_msgs.msg import Header
+from sensor_msgs.msg import CompressedImage, LaserScan
+from std_msgs.msg import ColorRGBA, Header
+from visualization_msgs.msg import Marker, MarkerArray, MeshFile, UVCoordinate
 
 HERE = Path(__file__).resolve().parent
 
@@ -228,6 +229,51 @@ def evaluate_response() -> Evaluate.Response:
     )
 
 
+def marker_array() -> MarkerArray:
+    """Two markers: the node's kind (points with per-point colours) and one with every Humble+
+    field set, odd-length strings and byte arrays included, so each field's place and alignment
+    in the layout is checked."""
+    points = Marker(
+        header=Header(stamp=Time(sec=42, nanosec=499_000_000), frame_id="odom"),
+        ns="cstep/endpoints",
+        id=0,
+        type=Marker.POINTS,
+        action=Marker.ADD,
+        lifetime=Duration(sec=0, nanosec=500_000_000),
+        points=[Point(x=1.25, y=-0.5, z=1.0), Point(x=-2.0, y=0.75, z=1.125)],
+        colors=[ColorRGBA(r=0.1, g=0.8, b=0.1, a=1.0), ColorRGBA(r=0.9, g=0.1, b=0.1, a=1.0)],
+    )
+    points.scale.x = points.scale.y = 0.05
+    points.color = ColorRGBA(r=0.1, g=0.8, b=0.1, a=1.0)
+    everything = Marker(
+        header=Header(stamp=Time(sec=-3, nanosec=7), frame_id="base"),
+        ns="all",
+        id=-17,
+        type=Marker.TRIANGLE_LIST,
+        action=Marker.DELETEALL,
+        lifetime=Duration(sec=2, nanosec=1),
+        frame_locked=True,
+        points=[Point(x=0.5, y=0.25, z=-1.0)],
+        colors=[],
+        texture_resource="file://t.png",
+        texture=CompressedImage(
+            header=Header(stamp=Time(sec=1, nanosec=2), frame_id="cam"),
+            format="png",
+            data=bytes([137, 80, 78]),
+        ),
+        uv_coordinates=[UVCoordinate(u=0.25, v=0.75)],
+        text="hi",
+        mesh_resource="package://m.dae",
+        mesh_file=MeshFile(filename="m.stl", data=bytes([1, 2, 3, 4, 5])),
+        mesh_use_embedded_materials=True,
+    )
+    everything.pose.position.x = 3.0
+    everything.pose.orientation.w = 0.5
+    everything.scale.z = 2.5
+    everything.color = ColorRGBA(r=0.2, g=0.5, b=1.0, a=0.25)
+    return MarkerArray(markers=[points, everything])
+
+
 # File stem -> message factory. The Rust test reads the same names.
 def pose_stamped() -> PoseStamped:
     msg = PoseStamped()
@@ -264,6 +310,7 @@ FIXTURES = {
     "evaluate_response": evaluate_response,
     "pose_stamped": pose_stamped,
     "diagnostic_array": diagnostic_array,
+    "marker_array": marker_array,
 }
 
 

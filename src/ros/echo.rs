@@ -1,0 +1,464 @@
+//! `cstep echo`: subscribe to one topic and print its messages as YAML documents, like
+//! `ros2 topic echo`, on machines without the ROS command-line tools.
+//!
+//! The message type comes from `--type`, else from the topic's name for cstep's own outputs,
+//! else from the publishers discovery finds on the topic. Only types cstep mirrors can be
+//! decoded ([`EchoType`]); anything else is a one-line error naming the type and the ones
+//! cstep knows. The DDS context is the node's ([`super::context`]): same `ROS_DOMAIN_ID`, same
+//! localhost-only discovery.
+
+use std::io::Write;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use futures::StreamExt;
+use ros2_client::dds::rustdds::policy::Reliability;
+use ros2_client::dds::rustdds::Topic;
+use ros2_client::qos::{Durability, History, WhenFull};
+use ros2_client::QosProfile;
+use ros2_client::{Context, Message, MessageTypeName, Name, Node, NodeName, NodeOptions};
+use serde::Serialize;
+
+use super::context::{context_from_env, resolve};
+use super::messages::{
+    DiagnosticArray, EmpoweredReward, Empowerment, LaserScan, MarkerArray, Odometry, PoseStamped,
+};
+use super::yaml::to_yaml;
+
+/// How long to look for a publisher when neither `--type` nor the topic's name tells the type
+/// (discovery usually takes 1–2 s); `--timeout` shortens it.
+pub const TYPE_DISCOVERY_WAIT: Duration = Duration::from_secs(5);
+
+/// What to echo and for how long.
+#[derive(Debug, Clone, PartialEq)]
+pub struct EchoOptions {
+    /// Topic name; a relative name is taken in the root namespace.
+    pub topic: String,
+    /// `pkg/msg/Name` (or `pkg/Name`), when the type cannot be told from the topic.
+    pub type_name: Option<String>,
+    /// Stop after this many messages (at least 1).
+    pub count: Option<u64>,
+    /// Give up after this long: an error unless `count` messages (or, without a count, at
+    /// least one) arrived.
+    pub timeout: Option<Duration>,
+}
+
+/// A message type cstep mirrors, and so can decode and print.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum EchoType {
+    /// `cstep_msgs/msg/Empowerment`.
+    Empowerment,
+    /// `cstep_msgs/msg/EmpoweredReward`.
+    EmpoweredReward,
+    /// `diagnostic_msgs/msg/DiagnosticArray`.
+    DiagnosticArray,
+    /// `visualization_msgs/msg/MarkerArray`.
+    MarkerArray,
+    /// `nav_msgs/msg/Odometry`.
+    Odometry,
+    /// `sensor_msgs/msg/LaserScan`.
+    LaserScan,
+    /// `geometry_msgs/msg/PoseStamped`.
+    PoseStamped,
+}
+
+impl EchoType {
+    /// Every type `cstep echo` can print.
+    pub const ALL: [EchoType; 7] = [
+        EchoType::Empowerment,
+        EchoType::EmpoweredReward,
+        EchoType::DiagnosticArray,
+        EchoType::MarkerArray,
+        EchoType::Odometry,
+        EchoType::LaserScan,
+        EchoType::PoseStamped,
+    ];
+
+    /// Package and type name.
+    pub fn parts(self) -> (&'static str, &'static str) {
+        match self {
+            EchoType::Empowerment => ("cstep_msgs", "Empowerment"),
+            EchoType::EmpoweredReward => ("cstep_msgs", "EmpoweredReward"),
+            EchoType::DiagnosticArray => ("diagnostic_msgs", "DiagnosticArray"),
+            EchoType::MarkerArray => ("visualization_msgs", "MarkerArray"),
+            EchoType::Odometry => ("nav_msgs", "Odometry"),
+            EchoType::LaserScan => ("sensor_msgs", "LaserScan"),
+            EchoType::PoseStamped => ("geometry_msgs", "PoseStamped"),
+        }
+    }
+
+    /// The ROS name, `pkg/msg/Name`.
+    pub fn name(self) -> String {
+        let (package, kind) = self.parts();
+        format!("{package}/msg/{kind}")
+    }
+
+    /// The type of cstep's own output topics, known by their default names.
+    pub fn of_cstep_topic(topic: &str) -> Option<Self> {
+        match topic {
+            "/cstep/empowerment" => Some(EchoType::Empowerment),
+            "/cstep/reward" => Some(EchoType::EmpoweredReward),
+            "/diagnostics" => Some(EchoType::DiagnosticArray),
+            "/cstep/markers" => Some(EchoType::MarkerArray),
+            _ => None,
+        }
+    }
+
+    /// The type named `pkg/msg/Name` or `pkg/Name`; an error lists the types cstep knows.
+    pub fn parse(name: &str) -> Result<Self, String> {
+        let canonical = match name.trim().split('/').collect::<Vec<_>>()[..] {
+            [package, "msg", kind] | [package, kind] => format!("{package}/msg/{kind}"),
+            _ => {
+                return Err(format!(
+                    "message type \"{name}\" is not of the form pkg/msg/Name"
+                ))
+            }
+        };
+        Self::ALL
+            .into_iter()
+            .find(|t| t.name() == canonical)
+            .ok_or_else(|| {
+                format!(
+                    "cstep echo cannot decode {canonical}: it knows {}",
+                    Self::known_list()
+                )
+            })
+    }
+
+    /// The ROS name of a DDS type name (`pkg::msg::dds_::Name_` → `pkg/msg/Name`), if it is one.
+    pub fn ros_name_of_dds(dds: &str) -> Option<String> {
+        match dds.split("::").collect::<Vec<_>>()[..] {
+            [package, prefix, "dds_", kind] => {
+                Some(format!("{package}/{prefix}/{}", kind.strip_suffix('_')?))
+            }
+            _ => None,
+        }
+    }
+
+    fn known_list() -> String {
+        Self::ALL.map(EchoType::name).join(", ")
+    }
+
+    fn type_name(self) -> MessageTypeName {
+        let (package, kind) = self.parts();
+        MessageTypeName::new(package, kind)
+    }
+}
+
+/// What discovery knows of a topic's publishers.
+struct Publishers {
+    /// Their ROS type names, deduplicated.
+    types: Vec<String>,
+    /// How many there are, and how many of them are reliable.
+    count: usize,
+    reliable: usize,
+}
+
+fn publishers(context: &Context, topic: &str) -> Publishers {
+    let dds_topic = format!("rt{topic}");
+    let mut found = Publishers {
+        types: Vec::new(),
+        count: 0,
+        reliable: 0,
+    };
+    for writer in context.domain_participant().discovered_writers() {
+        let data = &writer.publication_topic_data;
+        if data.topic_name != dds_topic {
+            continue;
+        }
+        found.count += 1;
+        if matches!(data.reliability, Some(Reliability::Reliable { .. })) {
+            found.reliable += 1;
+        }
+        let name = EchoType::ros_name_of_dds(&data.type_name).unwrap_or(data.type_name.clone());
+        if !found.types.contains(&name) {
+            found.types.push(name);
+        }
+    }
+    found
+}
+
+/// Runs `cstep echo`: prints each message on the topic to `out` as a YAML document followed by
+/// `---`, until `count` messages, the timeout, Ctrl-C, or a closed output.
+pub fn echo(options: &EchoOptions, out: &mut dyn Write) -> Result<(), String> {
+    if options.count == Some(0) {
+        return Err("--count must be at least 1".into());
+    }
+    let topic = resolve("/", options.topic.trim());
+    Name::parse(&topic).map_err(|e| {
+        format!(
+            "topic name \"{}\" is not a valid ROS name ({e:?})",
+            options.topic
+        )
+    })?;
+    let given = options
+        .type_name
+        .as_deref()
+        .map(EchoType::parse)
+        .transpose()?;
+    let started = Instant::now();
+
+    let context = context_from_env()?;
+    let node_name = format!("cstep_echo_{}", std::process::id());
+    let mut node = context
+        .new_node(
+            NodeName::new("/", &node_name).map_err(|e| format!("node name: {e:?}"))?,
+            NodeOptions::new().enable_rosout(false),
+        )
+        .map_err(|e| format!("cannot create the echo node: {e:?}"))?;
+
+    let kind = match given.or_else(|| EchoType::of_cstep_topic(&topic)) {
+        Some(kind) => kind,
+        None => discover_type(&context, &topic, options.timeout)?,
+    };
+    // Like `ros2 topic echo`: reliable when every publisher seen is, best effort (which matches
+    // any publisher) when one is not; cstep's own outputs are reliable.
+    let seen = publishers(&context, &topic);
+    let reliable = if seen.count > 0 {
+        seen.reliable == seen.count
+    } else {
+        EchoType::of_cstep_topic(&topic).is_some()
+    };
+    let qos = QosProfile::subscription_default()
+        .durability(Durability::Volatile)
+        .history(History::KeepLast { depth: 100 });
+    let qos = if reliable {
+        qos.reliability_reliable(WhenFull::Wait(Duration::from_millis(100)))
+    } else {
+        qos.reliability_best_effort()
+    };
+    let dds_topic = node
+        .create_topic(
+            &Name::parse(&topic).expect("checked"),
+            kind.type_name(),
+            &qos,
+        )
+        .map_err(|e| format!("topic {topic}: {e:?}"))?;
+
+    let run = Run {
+        context: &context,
+        topic: &topic,
+        kind,
+        options,
+        deadline: options.timeout.map(|t| started + t),
+    };
+    match kind {
+        EchoType::Empowerment => run.print::<Empowerment>(&mut node, &dds_topic, qos, out),
+        EchoType::EmpoweredReward => run.print::<EmpoweredReward>(&mut node, &dds_topic, qos, out),
+        EchoType::DiagnosticArray => run.print::<DiagnosticArray>(&mut node, &dds_topic, qos, out),
+        EchoType::MarkerArray => run.print::<MarkerArray>(&mut node, &dds_topic, qos, out),
+        EchoType::Odometry => run.print::<Odometry>(&mut node, &dds_topic, qos, out),
+        EchoType::LaserScan => run.print::<LaserScan>(&mut node, &dds_topic, qos, out),
+        EchoType::PoseStamped => run.print::<PoseStamped>(&mut node, &dds_topic, qos, out),
+    }
+}
+
+/// The type of `topic`'s publishers, once discovery finds one (within the discovery wait).
+fn discover_type(
+    context: &Context,
+    topic: &str,
+    timeout: Option<Duration>,
+) -> Result<EchoType, String> {
+    let wait = timeout.map_or(TYPE_DISCOVERY_WAIT, |t| t.min(TYPE_DISCOVERY_WAIT));
+    let deadline = Instant::now() + wait;
+    loop {
+        let seen = publishers(context, topic);
+        match &seen.types[..] {
+            [] if Instant::now() < deadline => std::thread::sleep(Duration::from_millis(100)),
+            [] => {
+                return Err(format!(
+                    "cannot tell the type of {topic}: no publisher found within {:.0} s and it is \
+                     not one of cstep's topics; pass --type pkg/msg/Name (one of {})",
+                    wait.as_secs_f64(),
+                    EchoType::known_list()
+                ))
+            }
+            [one] => {
+                return EchoType::parse(one).map_err(|_| {
+                    format!(
+                        "{topic} carries {one}, which cstep echo cannot decode (it knows {})",
+                        EchoType::known_list()
+                    )
+                })
+            }
+            several => {
+                return Err(format!(
+                    "{topic} is published with several types ({}); pass --type",
+                    several.join(", ")
+                ))
+            }
+        }
+    }
+}
+
+/// One echo run: where, what, until when.
+struct Run<'a> {
+    context: &'a Context,
+    topic: &'a str,
+    kind: EchoType,
+    options: &'a EchoOptions,
+    deadline: Option<Instant>,
+}
+
+impl Run<'_> {
+    fn print<M: Message + Serialize + 'static>(
+        &self,
+        node: &mut Node,
+        topic: &Topic,
+        qos: QosProfile,
+        out: &mut dyn Write,
+    ) -> Result<(), String> {
+        let subscription = node
+            .create_subscription::<M>(topic, Some(qos))
+            .map_err(|e| format!("cannot subscribe to {}: {e:?}", self.topic))?;
+        let stop = Arc::new(AtomicBool::new(false));
+        {
+            let stop = stop.clone();
+            ctrlc::set_handler(move || stop.store(true, Ordering::SeqCst))
+                .map_err(|e| format!("cannot install the Ctrl-C handler: {e}"))?;
+        }
+        let executor = smol::LocalExecutor::new();
+        executor
+            .spawn(node.spinner().map_err(|e| format!("{e:?}"))?.spin())
+            .detach();
+
+        let mut received: u64 = 0;
+        let wanted = self.options.count;
+        let ending: Result<Ending, String> = smol::block_on(executor.run(async {
+            let messages = subscription.async_stream();
+            futures::pin_mut!(messages);
+            let mut tick = smol::Timer::interval(Duration::from_millis(100));
+            let mut next_type_check = Instant::now() + Duration::from_secs(1);
+            loop {
+                futures::select! {
+                    received_message = messages.select_next_some() => match received_message {
+                        Ok((message, _)) => {
+                            if received == 0 {
+                                // A mismatched --type may decode into nonsense: check first.
+                                self.check_publisher_types()?;
+                            }
+                            let document = to_yaml(&message)
+                                .map_err(|e| format!("cannot print a message: {e}"))?;
+                            if out
+                                .write_all(document.as_bytes())
+                                .and_then(|()| out.write_all(b"---\n"))
+                                .and_then(|()| out.flush())
+                                .is_err()
+                            {
+                                return Ok(Ending::OutputClosed);
+                            }
+                            received += 1;
+                            if wanted.is_some_and(|n| received >= n) {
+                                return Ok(Ending::Done);
+                            }
+                        }
+                        Err(e) => eprintln!(
+                            "cstep echo: skipped a message on {} that is not a {}: {e:?}",
+                            self.topic,
+                            self.kind.name()
+                        ),
+                    },
+                    _ = futures::FutureExt::fuse(tick.next()) => {
+                        if stop.load(Ordering::SeqCst) {
+                            return Ok(Ending::Interrupted);
+                        }
+                        if self.deadline.is_some_and(|d| Instant::now() >= d) {
+                            return Ok(Ending::TimedOut);
+                        }
+                        if received == 0 && Instant::now() >= next_type_check {
+                            next_type_check = Instant::now() + Duration::from_secs(1);
+                            self.check_publisher_types()?;
+                        }
+                    }
+                }
+            }
+        }));
+        match ending? {
+            Ending::TimedOut => {
+                let waited = self.options.timeout.unwrap_or_default().as_secs_f64();
+                match wanted {
+                    Some(n) if received < n => Err(format!(
+                        "timed out after {waited} s: received {received} of {n} messages on {}",
+                        self.topic
+                    )),
+                    None if received == 0 => Err(format!(
+                        "no message on {} within {waited} s ({} publisher(s) seen)",
+                        self.topic,
+                        publishers(self.context, self.topic).count
+                    )),
+                    _ => Ok(()),
+                }
+            }
+            Ending::Done | Ending::Interrupted | Ending::OutputClosed => Ok(()),
+        }
+    }
+
+    /// Fails when the topic has publishers and none of them publishes this run's type (DDS
+    /// would never match them, and the echo would wait in silence).
+    fn check_publisher_types(&self) -> Result<(), String> {
+        let seen = publishers(self.context, self.topic);
+        let ours = self.kind.name();
+        if !seen.types.is_empty() && !seen.types.contains(&ours) {
+            return Err(format!(
+                "{} is published as {}, not {ours}",
+                self.topic,
+                seen.types.join(", ")
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// Why printing stopped.
+enum Ending {
+    Done,
+    TimedOut,
+    Interrupted,
+    OutputClosed,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn type_names_parse_in_both_spellings_and_unknown_ones_list_the_known() {
+        assert_eq!(
+            EchoType::parse("cstep_msgs/msg/Empowerment"),
+            Ok(EchoType::Empowerment)
+        );
+        assert_eq!(EchoType::parse("nav_msgs/Odometry"), Ok(EchoType::Odometry));
+        let err = EchoType::parse("std_msgs/msg/String").unwrap_err();
+        assert!(
+            err.contains("std_msgs/msg/String") && err.contains("sensor_msgs/msg/LaserScan"),
+            "{err}"
+        );
+        let err = EchoType::parse("Odometry").unwrap_err();
+        assert!(err.contains("pkg/msg/Name"), "{err}");
+    }
+
+    #[test]
+    fn every_type_round_trips_through_its_dds_name() {
+        for kind in EchoType::ALL {
+            let dds = kind.type_name().dds_msg_type();
+            let ros = EchoType::ros_name_of_dds(&dds).unwrap();
+            assert_eq!(ros, kind.name());
+            assert_eq!(EchoType::parse(&ros), Ok(kind));
+        }
+        assert_eq!(EchoType::ros_name_of_dds("std_msgs::msg::String"), None);
+    }
+
+    #[test]
+    fn cstep_topics_are_known_by_name() {
+        assert_eq!(
+            EchoType::of_cstep_topic("/cstep/markers"),
+            Some(EchoType::MarkerArray)
+        );
+        assert_eq!(
+            EchoType::of_cstep_topic("/diagnostics"),
+            Some(EchoType::DiagnosticArray)
+        );
+        assert_eq!(EchoType::of_cstep_topic("/scan"), None);
+    }
+}

@@ -8,6 +8,11 @@
 //! double-quoted otherwise. The serializer reports `is_human_readable() == false`, so message
 //! fields with a JSON-only stand-in (rosbridge's `null` for non-finite ranges) print their real
 //! values.
+//!
+//! Written here rather than with `serde_norway` (used for parameter files): that serializer
+//! reports itself human-readable, so scan ranges would print JSON's `null` stand-ins, and it
+//! writes exponents without a sign (`1e308`), which YAML 1.1 readers such as PyYAML read as
+//! strings.
 
 use std::fmt::{self, Write as _};
 

@@ -5,6 +5,7 @@ available to every test; its helpers (``Rig``, ``corridor_scan``, ``odometry``,
 ``message_to_ordereddict``, ``cstep_binary``) are imported from it.
 """
 
+import json
 import math
 import os
 import signal
@@ -66,6 +67,20 @@ def cstep_node(ros_domain):
             except subprocess.TimeoutExpired:
                 proc.kill()
                 proc.wait(timeout=5)
+
+
+def cstep_eval(tmp_path, odom, scan, goal=None) -> dict:
+    """`cstep eval --format json` on these messages (written as rosbridge-style JSON)."""
+    (tmp_path / "odom.json").write_text(json.dumps(message_to_ordereddict(odom)))
+    s = message_to_ordereddict(scan)
+    s["ranges"] = [None if math.isinf(r) else r for r in s["ranges"]]
+    (tmp_path / "scan.json").write_text(json.dumps(s))
+    command = [str(cstep_binary()), "eval", "--config", str(CONFIG), "--format", "json"]
+    command += ["--odom", str(tmp_path / "odom.json"), "--scan", str(tmp_path / "scan.json")]
+    if goal is not None:
+        command += ["--goal", ",".join(repr(float(g)) for g in goal)]
+    out = subprocess.run(command, capture_output=True, text=True, check=True)
+    return json.loads(out.stdout)
 
 
 def corridor_scan(sec: int, width: float = 2.5, beams: int = 180) -> LaserScan:

@@ -1,9 +1,7 @@
 """cstep_bridge: the PyBullet drone (real physics), its LiDAR, collisions, the Gymnasium env, and
 the empowered reward from a live `cstep node` over real rclpy (a private domain per test)."""
 
-import json
 import math
-import subprocess
 
 import numpy as np
 import pybullet as p
@@ -12,7 +10,7 @@ from cstep_bridge.env import CStepDroneEnv
 from cstep_bridge.ros_io import RewardTimeout, RosBridge, odometry_msg, scan_msg
 from cstep_bridge.sim import LIDAR_BEAMS, Arena, DroneSim
 from gymnasium.utils.env_checker import check_env
-from test_node import CONFIG, cstep_binary, message_to_ordereddict
+from node_rig import cstep_eval
 
 START = np.array([-0.15, -0.6, 1.0])
 GOAL = np.array([3.5, -0.6, 1.0])
@@ -103,33 +101,6 @@ def test_check_env_on_the_unempowered_env():
         assert set(info) >= {"success", "collision", "time", "min_obstacle_distance"}
     finally:
         env.close()
-
-
-def cstep_eval(tmp_path, odom, scan, goal) -> dict:
-    (tmp_path / "odom.json").write_text(json.dumps(message_to_ordereddict(odom)))
-    s = message_to_ordereddict(scan)
-    s["ranges"] = [None if math.isinf(r) else r for r in s["ranges"]]
-    (tmp_path / "scan.json").write_text(json.dumps(s))
-    out = subprocess.run(
-        [
-            str(cstep_binary()),
-            "eval",
-            "--config",
-            str(CONFIG),
-            "--format",
-            "json",
-            "--odom",
-            str(tmp_path / "odom.json"),
-            "--scan",
-            str(tmp_path / "scan.json"),
-            "--goal",
-            ",".join(repr(float(g)) for g in goal),
-        ],
-        capture_output=True,
-        text=True,
-        check=True,
-    )
-    return json.loads(out.stdout)
 
 
 def test_empowered_env_gets_finite_rewards_matching_cstep_eval_and_the_topic_path(

@@ -1,14 +1,12 @@
 """`cstep node` against real rclpy over real DDS (localhost, a private domain per test)."""
 
-import json
 import math
-import subprocess
 
 import pytest
 from conftest import wait_until
 from cstep_msgs.srv import Evaluate
 from diagnostic_msgs.msg import DiagnosticStatus
-from node_rig import CONFIG, corridor_scan, cstep_binary, message_to_ordereddict, odometry
+from node_rig import corridor_scan, cstep_eval, message_to_ordereddict, odometry
 from rcl_interfaces.msg import Parameter, ParameterType, ParameterValue
 from rcl_interfaces.srv import SetParameters
 
@@ -28,28 +26,7 @@ def test_every_scan_gets_both_outputs_with_its_stamp_and_cstep_eval_agrees(rig, 
     assert all(m.header.frame_id == "odom" for m in rig.empowerment)
 
     # The same input through `cstep eval` gives the same numbers.
-    (tmp_path / "odom.json").write_text(json.dumps(message_to_ordereddict(odometry())))
-    scan = message_to_ordereddict(corridor_scan(1000))
-    scan["ranges"] = [None if math.isinf(r) else r for r in scan["ranges"]]
-    (tmp_path / "scan.json").write_text(json.dumps(scan))
-    out = subprocess.run(
-        [
-            str(cstep_binary()),
-            "eval",
-            "--config",
-            str(CONFIG),
-            "--format",
-            "json",
-            "--odom",
-            str(tmp_path / "odom.json"),
-            "--scan",
-            str(tmp_path / "scan.json"),
-        ],
-        capture_output=True,
-        text=True,
-        check=True,
-    )
-    offline = json.loads(out.stdout)
+    offline = cstep_eval(tmp_path, odometry(), corridor_scan(1000))
     live = next(m for m in rig.empowerment if m.header.stamp.sec == 1000)
     assert offline["empowerment"] == pytest.approx(live.empowerment, abs=1e-12)
     assert offline["num_colliding"] == live.num_colliding

@@ -29,7 +29,7 @@ use super::convert::{empowerment_message, laser_scan_to_scan, odometry_to_state,
 use super::markers::rollout_markers;
 use super::messages::{
     DiagnosticArray, DiagnosticStatus, EmpoweredReward, Empowerment, EvaluateRequest,
-    EvaluateResponse, Header, KeyValue, LaserScan, MarkerArray, Odometry, PoseStamped,
+    EvaluateResponse, Header, KeyValue, LaserScan, MarkerArray, Odometry, PoseStamped, Time,
 };
 use crate::config::{load_all, NodeSettings, DEFAULT_NODE_NAME};
 use crate::estimator::Estimator;
@@ -131,6 +131,8 @@ struct Latest {
     rejected: u64,
     markers_published: u64,
     last_problem: Option<String>,
+    /// Stamp of the newest scan taken for scoring: an older one arriving later is out of order.
+    newest_stamp: Option<Time>,
 }
 
 /// The node's topics and service.
@@ -382,6 +384,22 @@ fn score_scans(shared: &Shared, outputs: &Outputs) {
         };
         if seen.elapsed() > shared.timeout {
             shared.note_problem(|l| l.stale += 1, "odometry is stale");
+            continue;
+        }
+        let out_of_order = {
+            let mut latest = shared.latest();
+            let stamp = scan.header.stamp;
+            let older = latest.newest_stamp.is_some_and(|newest| stamp < newest);
+            if !older {
+                latest.newest_stamp = Some(stamp);
+            }
+            older
+        };
+        if out_of_order {
+            shared.note_problem(
+                |l| l.rejected += 1,
+                "scan stamp older than an earlier scan's",
+            );
             continue;
         }
         let goal = shared.latest().goal;

@@ -38,12 +38,6 @@ fn main() {
             }
         });
         println!("collision checks, 150 points × 100 steps: {checks_us:.1} µs");
-        let mut thin = opts.clone();
-        thin.robot_radius = 0.001;
-        let thin_us = time(&mut || {
-            std::hint::black_box(Occupancy::build(&scan, &state.attitude, 1.0, &thin));
-        });
-        println!("occupancy build with a 1 mm radius (almost no inflation): {thin_us:.1} µs");
         let volumes_us = time(&mut || {
             std::hint::black_box(cstep::volume::estimate(
                 &estimate.rollout.endpoints,

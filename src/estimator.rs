@@ -207,8 +207,8 @@ impl Estimator {
             rollout: Rollout::default(),
             elapsed: Duration::ZERO,
         };
-        let summary = scan.summary();
         let occupancy = Occupancy::build(scan, &state.attitude, state.position.z, &s.occupancy);
+        let summary = occupancy.summary();
         estimate.status = if scan.ranges.is_empty() {
             Status::EmptyScan
         } else if summary.hits + summary.no_returns == 0 {

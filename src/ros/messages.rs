@@ -180,10 +180,10 @@ pub struct LaserScan {
     /// Longest measurable range, metres.
     pub range_max: f32,
     /// Ranges, metres (REP 117 for non-finite values).
-    #[serde(with = "lenient_floats")]
+    #[serde(deserialize_with = "lenient_floats::deserialize")]
     pub ranges: Vec<f32>,
     /// Intensities, device units.
-    #[serde(with = "lenient_floats")]
+    #[serde(deserialize_with = "lenient_floats::deserialize")]
     pub intensities: Vec<f32>,
 }
 
@@ -455,21 +455,11 @@ ros_messages!(
 
 /// Float arrays that read JSON's stand-ins for non-finite numbers and pass binary formats
 /// through untouched. `cdr-encoding` (the DDS wire format) reports `is_human_readable() ==
-/// false` both ways, so CDR sees a plain `sequence<float32>`, NaN bits and all
-/// (`tests/cdr_roundtrip.rs`).
+/// false`, so CDR sees a plain `sequence<float32>`, NaN bits and all (`tests/cdr_roundtrip.rs`).
+/// Writing needs nothing special: serde_json already writes non-finite floats as `null`.
 mod lenient_floats {
     use serde::de::{self, Deserializer, Visitor};
-    use serde::{Deserialize, Serialize, Serializer};
-
-    pub fn serialize<S: Serializer>(values: &[f32], serializer: S) -> Result<S::Ok, S::Error> {
-        if serializer.is_human_readable() {
-            let shown: Vec<Option<f32>> =
-                values.iter().map(|v| v.is_finite().then_some(*v)).collect();
-            shown.serialize(serializer)
-        } else {
-            values.serialize(serializer)
-        }
-    }
+    use serde::Deserialize;
 
     pub fn deserialize<'de, D: Deserializer<'de>>(deserializer: D) -> Result<Vec<f32>, D::Error> {
         if deserializer.is_human_readable() {

@@ -207,6 +207,15 @@ fn key_text(tree: Tree) -> Result<String, Error> {
     }
 }
 
+/// Booleans and integers print as Rust writes them, which every YAML reader takes back.
+macro_rules! plain_scalars {
+    ($($method:ident: $t:ty),*) => {$(
+        fn $method(self, v: $t) -> Result<Tree, Error> {
+            Ok(Tree::Scalar(v.to_string()))
+        }
+    )*};
+}
+
 impl ser::Serializer for TreeSerializer {
     type Ok = Tree;
     type Error = Error;
@@ -222,33 +231,17 @@ impl ser::Serializer for TreeSerializer {
         false
     }
 
-    fn serialize_bool(self, v: bool) -> Result<Tree, Error> {
-        Ok(Tree::Scalar(v.to_string()))
-    }
-    fn serialize_i8(self, v: i8) -> Result<Tree, Error> {
-        Ok(Tree::Scalar(v.to_string()))
-    }
-    fn serialize_i16(self, v: i16) -> Result<Tree, Error> {
-        Ok(Tree::Scalar(v.to_string()))
-    }
-    fn serialize_i32(self, v: i32) -> Result<Tree, Error> {
-        Ok(Tree::Scalar(v.to_string()))
-    }
-    fn serialize_i64(self, v: i64) -> Result<Tree, Error> {
-        Ok(Tree::Scalar(v.to_string()))
-    }
-    fn serialize_u8(self, v: u8) -> Result<Tree, Error> {
-        Ok(Tree::Scalar(v.to_string()))
-    }
-    fn serialize_u16(self, v: u16) -> Result<Tree, Error> {
-        Ok(Tree::Scalar(v.to_string()))
-    }
-    fn serialize_u32(self, v: u32) -> Result<Tree, Error> {
-        Ok(Tree::Scalar(v.to_string()))
-    }
-    fn serialize_u64(self, v: u64) -> Result<Tree, Error> {
-        Ok(Tree::Scalar(v.to_string()))
-    }
+    plain_scalars!(
+        serialize_bool: bool,
+        serialize_i8: i8,
+        serialize_i16: i16,
+        serialize_i32: i32,
+        serialize_i64: i64,
+        serialize_u8: u8,
+        serialize_u16: u16,
+        serialize_u32: u32,
+        serialize_u64: u64
+    );
     fn serialize_f32(self, v: f32) -> Result<Tree, Error> {
         Ok(Tree::Scalar(float_scalar(format!("{v:?}"), v as f64)))
     }

@@ -21,7 +21,7 @@ VENV_ENV := env -u PYTHONPATH -u AMENT_PREFIX_PATH -u COLCON_PREFIX_PATH \
 ROS_BUILD_ENV := $(VENV_ENV) \
 	AMENT_PREFIX_PATH=$(VENV_ABS) CMAKE_PREFIX_PATH=$(VENV_ABS) PATH=$(VENV_ABS)/bin:$$PATH
 
-.PHONY: test lint lint-rust lint-python test-rust test-python venv bench bench-latency
+.PHONY: test lint lint-rust lint-python test-rust test-python venv bench bench-latency bench-steps
 
 test: lint test-rust test-python
 
@@ -86,3 +86,8 @@ bench:
 bench-latency: $(MSGS_STAMP)
 	$(CARGO) build --release --quiet
 	$(VENV_ENV) CSTEP_BIN=$(abspath $(TARGET_DIR))/release/cstep $(VPY) benches/python/bench_latency.py
+
+# Environment steps per second, unempowered vs empowered reward, on one core.
+bench-steps: $(MSGS_STAMP)
+	$(CARGO) build --release --quiet
+	$(VENV_ENV) CSTEP_BIN=$(abspath $(TARGET_DIR))/release/cstep $(VPY) benches/python/bench_steps.py

@@ -1,0 +1,340 @@
+"""Evaluate trained agents side by side on a fixed set of configurations, with the paper's metrics.
+
+    python -m cstep_bridge.evaluate --model runs/drone-unempowered --model runs/drone-empowered-c1 \\
+        --out docs/results/drone
+
+Every agent flies every configuration of the environment's fixed evaluation set (the drone: the
+100 arenas of ``data/drone_eval_set.json``; the maze: its 18 start × goal combinations) with its
+deterministic policy. Evaluation needs no reward, so no ``cstep node`` runs. Writes to ``--out``:
+
+- ``results.md``: the paper's tables — success rate and average clear time; mean time per episode
+  within 0.1 … 0.5 m of an obstacle; its decrease relative to the first agent (the baseline); for
+  the maze also which route each agent took.
+- ``results.json``: every summary, and every episode's outcome.
+- ``paths.png``: the flown paths over the map (the drone: the first six configurations).
+- ``time_near_obstacle.png``: mean time within a distance of an obstacle against the distance.
+
+The metrics are defined in :mod:`cstep_bridge.metrics`.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import shlex
+import sys
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import asdict, dataclass
+from multiprocessing import get_context
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from . import metrics
+from .envs import ENV_NAMES, make_env
+from .plots import MapPanel, Path2D, paths_figure, threshold_figure
+
+FINE_THRESHOLDS = tuple(np.round(np.arange(0.05, 0.501, 0.025), 3))
+DRONE_PANELS = 6
+
+
+@dataclass
+class Agent:
+    """A trained model to evaluate, and how it is called in the tables."""
+
+    label: str
+    model: Path
+    env: str
+    steps: int
+
+
+def find_agent(path: Path, label: str | None) -> Agent:
+    """The agent in ``path`` (a run directory or a model .zip); its env and label from run.json."""
+    model = path / "model.zip" if path.is_dir() else path
+    if not model.exists():
+        raise SystemExit(f"{path}: no model (expected a run directory with model.zip, or a .zip)")
+    run = next(
+        (d / "run.json" for d in (model.parent, model.parent.parent) if (d / "run.json").exists()),
+        None,
+    )
+    settings = json.loads(run.read_text()) if run else {}
+    from stable_baselines3.common.save_util import load_from_zip_file
+
+    data, _, _ = load_from_zip_file(model, device="cpu", load_data=True)
+    if label is None:
+        agent = settings.get("agent", model.stem)
+        label = f"empowered c={settings['c']:g}" if agent == "empowered" else agent
+    return Agent(label, model, settings.get("env", ""), int(data.get("num_timesteps", 0)))
+
+
+def configurations(env: str) -> list[Any]:
+    """The environment's fixed evaluation set, in order."""
+    if env == "drone":
+        from .eval_set import load
+
+        return load()
+    from .maze import configurations as maze_configurations
+
+    return maze_configurations()
+
+
+def reset_options(env: str, config: Any) -> dict[str, Any]:
+    """The ``reset`` options that pin one configuration."""
+    return {"arena": config} if env == "drone" else {"config": config}
+
+
+def fly(model_path: Path, env_name: str, indices: list[int]) -> list[metrics.Episode]:
+    """Flies configurations ``indices`` with the deterministic policy (in a worker process)."""
+    import torch
+    from stable_baselines3 import PPO
+
+    torch.set_num_threads(1)
+    model = PPO.load(model_path, device="cpu")
+    configs = configurations(env_name)
+    env = make_env(env_name, empowered=False)
+    radius = env.unwrapped.robot_radius
+    dt = env.unwrapped.control_period
+    episodes = []
+    try:
+        for i in indices:
+            obs, info = env.reset(seed=i, options=reset_options(env_name, configs[i]))
+            xy, gap, done = [], [], False
+            while not done:
+                action, _ = model.predict(obs, deterministic=True)
+                obs, _, terminated, truncated, info = env.step(action)
+                xy.append(info["position"])
+                gap.append(info["min_obstacle_distance"] - radius)
+                done = terminated or truncated
+            episode = metrics.Episode(
+                dt=dt,
+                xy=np.array(xy),
+                gap=np.array(gap),
+                success=bool(info["success"] and not info["collision"]),
+                collision=bool(info["collision"]),
+                config=i,
+            )
+            if env_name == "maze":
+                from .maze import route_taken
+
+                episode.extra["route"] = route_taken(episode.xy)
+            episodes.append(episode)
+    finally:
+        env.close()
+    return episodes
+
+
+def evaluate_agent(agent: Agent, env: str, indices: list[int], jobs: int) -> list[metrics.Episode]:
+    """All of ``indices`` for one agent, split over ``jobs`` worker processes."""
+    chunks = [c.tolist() for c in np.array_split(indices, jobs) if len(c)]
+    with ProcessPoolExecutor(len(chunks), mp_context=get_context("spawn")) as pool:
+        parts = pool.map(fly, [agent.model] * len(chunks), [env] * len(chunks), chunks)
+        episodes = [e for part in parts for e in part]
+    return sorted(episodes, key=lambda e: e.config)
+
+
+def clear_x(env: str) -> float | None:
+    """Where the obstacle is cleared: the drone block's far face (the maze has none)."""
+    if env != "drone":
+        return None
+    from .sim import Arena
+
+    return Arena().block_x[1]
+
+
+def _fmt(v: float | None, spec: str, suffix: str = "") -> str:
+    return "–" if v is None else f"{v:{spec}}{suffix}"
+
+
+def markdown(
+    env: str, agents: list[Agent], results: dict[str, list[metrics.Episode]], command: str
+) -> str:
+    """results.md: the paper's tables for these agents."""
+    summaries = {a.label: metrics.summarize(results[a.label], clear_x(env)) for a in agents}
+    n = len(next(iter(results.values())))
+    th = metrics.THRESHOLDS
+    head = "| Distance threshold (m) | " + " | ".join(f"{d:g}" for d in th) + " |"
+    rule = "|---|" + "---|" * len(th)
+    lines = [
+        f"# Evaluation: {env}, {n} configurations",
+        "",
+        f"Command: `{command}`",
+        "",
+        "| Agent | Model | Training steps |",
+        "|---|---|---:|",
+        *(f"| {a.label} | `{a.model}` | {a.steps} |" for a in agents),
+        "",
+        "## Success rate and time to clear the obstacle",
+        "",
+        "| Agent | Success rate | Avg. clear time (s) | Collision rate | Cleared |",
+        "|---|---:|---:|---:|---:|",
+    ]
+    for label, s in summaries.items():
+        lines.append(
+            f"| {label} | {s.success_rate:.0%} | {_fmt(s.clear_time, '.2f')} | "
+            f"{s.collision_rate:.0%} | {s.cleared}/{s.episodes} |"
+        )
+    if env == "maze":
+        lines += [
+            "",
+            "## Route taken",
+            "",
+            "| Agent | Narrow | Wide | Neither |",
+            "|---|---:|---:|---:|",
+        ]
+        for label, eps in results.items():
+            routes = [e.extra["route"] for e in eps]
+            shares = [routes.count(r) / len(routes) for r in ("narrow", "wide", "neither")]
+            lines.append(f"| {label} | " + " | ".join(f"{s:.0%}" for s in shares) + " |")
+    lines += [
+        "",
+        "## Mean time per episode within a distance of an obstacle (s)",
+        "",
+        "Distance: from the robot's surface (centre distance minus its collision radius).",
+        "",
+        head,
+        rule,
+        *(
+            f"| {label} | " + " | ".join(f"{s.time_within[d]:.2f}" for d in th) + " |"
+            for label, s in summaries.items()
+        ),
+    ]
+    base_label, base = next(iter(summaries.items()))
+    if len(summaries) > 1:
+        lines += [
+            "",
+            f"## Decrease in time near obstacles relative to {base_label}",
+            "",
+            head,
+            rule,
+        ]
+        for label, s in list(summaries.items())[1:]:
+            cut = metrics.decrease(s, base)
+            lines.append(f"| {label} | " + " | ".join(_fmt(cut[d], ".1f", "%") for d in th) + " |")
+    return "\n".join(lines) + "\n"
+
+
+def panels(
+    env: str, agents: list[Agent], results: dict[str, list[metrics.Episode]]
+) -> list[MapPanel]:
+    """The maps to draw paths on: six drone configurations, or the maze once per agent."""
+    configs = configurations(env)
+    if env == "drone":
+        shown = sorted({e.config for e in next(iter(results.values()))})[:DRONE_PANELS]
+        out = []
+        for i in shown:
+            a = configs[i]
+            panel = MapPanel(
+                f"configuration {i}", a.bounds, [a.block], starts=[a.start], goals=[a.goal]
+            )
+            for agent in agents:
+                e = next(e for e in results[agent.label] if e.config == i)
+                panel.paths.append(Path2D(agent.label, e.xy, e.collision))
+            out.append(panel)
+        return out
+    from .maze import LAYOUT
+
+    out = []
+    for agent in agents:
+        eps = results[agent.label]
+        panel = MapPanel(
+            agent.label,
+            LAYOUT.bounds,
+            LAYOUT.walls,
+            starts=[configs[e.config].start for e in eps],
+            goals=[configs[e.config].goal for e in eps],
+        )
+        panel.paths = [Path2D(agent.label, e.xy, e.collision) for e in eps]
+        out.append(panel)
+    return out
+
+
+def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
+    """The command line."""
+    ap = argparse.ArgumentParser(
+        prog="python -m cstep_bridge.evaluate",
+        description="Evaluate trained agents on the fixed evaluation set with the paper's metrics.",
+    )
+    ap.add_argument(
+        "--model",
+        type=Path,
+        action="append",
+        required=True,
+        help="a run directory or model .zip; repeat for each agent (first = baseline)",
+    )
+    ap.add_argument("--label", action="append", help="a name per --model, in the same order")
+    ap.add_argument("--env", choices=ENV_NAMES, help="default: from the models' run.json")
+    ap.add_argument("--episodes", type=int, help="only the first N configurations")
+    ap.add_argument("--jobs", type=int, default=1, help="worker processes per agent")
+    ap.add_argument("--out", type=Path, required=True, help="directory for results and plots")
+    args = ap.parse_args(argv)
+    if args.label and len(args.label) != len(args.model):
+        ap.error(f"{len(args.label)} --label for {len(args.model)} --model: give one per model")
+    if args.episodes is not None and args.episodes <= 0 or args.jobs <= 0:
+        ap.error("--episodes and --jobs must be > 0")
+    return args
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point of ``python -m cstep_bridge.evaluate``."""
+    args = parse_args(argv)
+    labels = args.label or [None] * len(args.model)
+    agents = [find_agent(m, lb) for m, lb in zip(args.model, labels, strict=True)]
+    envs = {args.env} if args.env else {a.env for a in agents}
+    if len(envs) != 1 or "" in envs:
+        raise SystemExit(f"cannot tell which env to evaluate on ({envs}): pass --env")
+    env = envs.pop()
+    if len({a.label for a in agents}) != len(agents):
+        raise SystemExit("two agents share a label: pass --label for each --model")
+    n = len(configurations(env))
+    indices = list(range(min(n, args.episodes or n)))
+    results = {}
+    for agent in agents:
+        print(f"{agent.label}: {len(indices)} episodes on {env} ({agent.model})", flush=True)
+        results[agent.label] = evaluate_agent(agent, env, indices, args.jobs)
+        s = metrics.summarize(results[agent.label], clear_x(env))
+        print(
+            f"  success {s.success_rate:.0%}, collisions {s.collision_rate:.0%}, "
+            f"clear time {_fmt(s.clear_time, '.2f', ' s')}",
+            flush=True,
+        )
+    out: Path = args.out
+    out.mkdir(parents=True, exist_ok=True)
+    command = "python -m cstep_bridge.evaluate " + shlex.join(
+        argv if argv is not None else sys.argv[1:]
+    )
+    (out / "results.md").write_text(markdown(env, agents, results, command))
+    summaries = {a.label: asdict(metrics.summarize(results[a.label], clear_x(env))) for a in agents}
+    episodes = {
+        label: [
+            {
+                "config": e.config,
+                "success": e.success,
+                "collision": e.collision,
+                "duration": e.duration,
+                "min_gap": float(e.gap.min()),
+                **e.extra,
+            }
+            for e in eps
+        ]
+        for label, eps in results.items()
+    }
+    (out / "results.json").write_text(
+        json.dumps(
+            {"env": env, "command": command, "summaries": summaries, "episodes": episodes}, indent=1
+        )
+    )
+    paths_figure(panels(env, agents, results), [a.label for a in agents], out / "paths.png")
+    fine = {
+        label: [sum(e.time_within(d) for e in eps) / len(eps) for d in FINE_THRESHOLDS]
+        for label, eps in results.items()
+    }
+    threshold_figure(
+        FINE_THRESHOLDS, fine, out / "time_near_obstacle.png", title=f"{env}: time near obstacles"
+    )
+    print(f"wrote {out / 'results.md'}, results.json, paths.png, time_near_obstacle.png")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

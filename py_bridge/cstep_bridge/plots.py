@@ -1,0 +1,144 @@
+"""Figures of training and evaluation (matplotlib, written as PNG without a display)."""
+
+from __future__ import annotations
+
+import csv
+import json
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")  # files only: no display needed, none opened
+import matplotlib.pyplot as plt
+import numpy as np
+from matplotlib.patches import Rectangle
+
+Rect = tuple[float, float, float, float]  # x0, y0, x1, y1
+
+
+def read_monitor(monitor_dir: Path) -> np.ndarray:
+    """Every episode of SB3's Monitor CSVs in ``monitor_dir`` in the order they ended, as rows of
+    (training step at the episode's end, reward, success)."""
+    rows = []
+    for path in sorted(Path(monitor_dir).glob("*.monitor.csv")):
+        with path.open() as f:
+            header = f.readline()
+            if not header.startswith("#"):
+                raise ValueError(f"{path}: not a Monitor file (no '#' header line)")
+            json.loads(header[1:])
+            for rec in csv.DictReader(f):
+                success = rec.get("success", "False") in ("True", "1", "1.0")
+                rows.append((float(rec["t"]), int(rec["l"]), float(rec["r"]), float(success)))
+    rows.sort()
+    if not rows:
+        return np.zeros((0, 3))
+    a = np.array(rows)
+    return np.column_stack([np.cumsum(a[:, 1]), a[:, 2], a[:, 3]])
+
+
+def _smooth(values: np.ndarray, window: int) -> np.ndarray:
+    window = max(1, min(window, len(values)))
+    kernel = np.ones(window) / window
+    return np.convolve(values, kernel, mode="valid")
+
+
+def training_curve(monitor_dir: Path, png: Path, title: str = "") -> None:
+    """Episode reward and success rate over training steps (moving averages of 20 episodes)."""
+    data = read_monitor(monitor_dir)
+    fig, (ax_r, ax_s) = plt.subplots(2, 1, figsize=(7, 5), sharex=True)
+    if len(data):
+        window = min(20, len(data))
+        steps = data[window - 1 :, 0]
+        ax_r.plot(data[:, 0], data[:, 1], ".", color="0.75", ms=3, label="episode")
+        ax_r.plot(steps, _smooth(data[:, 1], window), color="C0", label=f"mean of {window}")
+        ax_s.plot(steps, 100 * _smooth(data[:, 2], window), color="C2")
+        ax_r.legend(loc="lower right")
+    else:
+        ax_r.text(0.5, 0.5, "no episode finished yet", ha="center", transform=ax_r.transAxes)
+    ax_r.set_ylabel("episode reward")
+    ax_s.set_ylabel("success rate (%)")
+    ax_s.set_xlabel("training steps")
+    ax_s.set_ylim(-5, 105)
+    fig.suptitle(title)
+    fig.tight_layout()
+    fig.savefig(png, dpi=120)
+    plt.close(fig)
+
+
+@dataclass
+class Path2D:
+    """One flown path to draw: positions, and whether it ended in a collision."""
+
+    label: str
+    xy: np.ndarray
+    collision: bool
+
+
+@dataclass
+class MapPanel:
+    """One map (bounds and obstacle rectangles) with paths flown over it."""
+
+    title: str
+    bounds: Rect
+    obstacles: Sequence[Rect]
+    paths: list[Path2D] = field(default_factory=list)
+    starts: list[np.ndarray] = field(default_factory=list)
+    goals: list[np.ndarray] = field(default_factory=list)
+
+
+def paths_figure(panels: Sequence[MapPanel], labels: Sequence[str], png: Path, cols: int = 3):
+    """Top-down maps with each agent's paths in its own colour (× marks a collision)."""
+    colours = {label: f"C{i}" for i, label in enumerate(labels)}
+    rows = -(-len(panels) // cols)
+    x0, y0, x1, y1 = panels[0].bounds
+    aspect = (y1 - y0) / (x1 - x0)
+    fig, axes = plt.subplots(
+        rows, cols, figsize=(4.2 * cols, 4.2 * cols * aspect * rows / cols + 1)
+    )
+    for ax, panel in zip(np.ravel(axes), panels, strict=False):
+        bx0, by0, bx1, by1 = panel.bounds
+        ax.add_patch(Rectangle((bx0, by0), bx1 - bx0, by1 - by0, fill=False, lw=2, color="k"))
+        for ox0, oy0, ox1, oy1 in panel.obstacles:
+            ax.add_patch(Rectangle((ox0, oy0), ox1 - ox0, oy1 - oy0, color="#b04a35"))
+        for s in panel.starts:
+            ax.plot(*s[:2], "s", color="gold", ms=9, mec="k")
+        for g in panel.goals:
+            ax.plot(*g[:2], "*", color="limegreen", ms=14, mec="k")
+        for path in panel.paths:
+            c = colours[path.label]
+            ax.plot(path.xy[:, 0], path.xy[:, 1], color=c, lw=1.3, alpha=0.85)
+            if path.collision and len(path.xy):
+                ax.plot(*path.xy[-1], "x", color=c, ms=10, mew=2.5)
+        ax.set_title(panel.title, fontsize=9)
+        ax.set_xlim(bx0 - 0.1, bx1 + 0.1)
+        ax.set_ylim(by0 - 0.1, by1 + 0.1)
+        ax.set_aspect("equal")
+        ax.tick_params(labelsize=7)
+    for ax in np.ravel(axes)[len(panels) :]:
+        ax.axis("off")
+    handles = [plt.Line2D([], [], color=colours[lb], lw=2, label=lb) for lb in labels]
+    handles.append(plt.Line2D([], [], color="k", marker="x", ls="", label="collision"))
+    fig.legend(handles=handles, loc="lower center", ncol=len(handles), fontsize=9)
+    fig.tight_layout(rect=(0, 0.06, 1, 1))
+    fig.savefig(png, dpi=120)
+    plt.close(fig)
+
+
+def threshold_figure(
+    thresholds: Sequence[float], seconds: Mapping[str, Sequence[float]], png: Path, title: str = ""
+) -> None:
+    """Mean time per episode within a distance of an obstacle, per agent, against the distance
+    (the paper's Figure "average time spent under different distance thresholds")."""
+    fig, ax = plt.subplots(figsize=(6, 4))
+    for i, (label, values) in enumerate(seconds.items()):
+        ax.plot(thresholds, values, marker="o", ms=3, color=f"C{i}", label=label)
+    ax.set_xlabel("distance to the nearest obstacle below (m)")
+    ax.set_ylabel("mean time per episode (s)")
+    ax.set_title(title)
+    ax.grid(alpha=0.3)
+    ax.legend()
+    fig.tight_layout()
+    fig.savefig(png, dpi=120)
+    plt.close(fig)

@@ -1,0 +1,149 @@
+"""The trainer and the evaluation CLI, end to end on tiny runs: real PyBullet, real SB3 PPO, and for
+the empowered agent real `cstep node`s over real DDS (each env its own private domain)."""
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+from stable_baselines3 import PPO
+
+REPO = Path(__file__).resolve().parents[2]
+TINY = [
+    "--net",
+    "32,32",
+    "--n-steps",
+    "64",
+    "--batch-size",
+    "32",
+    "--n-epochs",
+    "2",
+    "--no-progress",
+]
+
+
+def run(module: str, *args: str, ok: bool = True) -> subprocess.CompletedProcess:
+    """``python -m cstep_bridge.<module> args``; asserts it succeeded (or, ``ok=False``, failed)."""
+    proc = subprocess.run(
+        [sys.executable, "-m", f"cstep_bridge.{module}", *args],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        env=dict(os.environ, PYTHONPATH=str(REPO / "py_bridge")),
+        cwd=REPO,
+        check=False,
+    )
+    assert (proc.returncode == 0) == ok, (
+        f"{module}: {proc.returncode}\n{proc.stdout}\n{proc.stderr}"
+    )
+    return proc
+
+
+@pytest.fixture(scope="module")
+def drone_run(tmp_path_factory) -> Path:
+    """A 128-step unempowered drone run, then resumed to 192 steps."""
+    out = tmp_path_factory.mktemp("runs") / "drone"
+    first = run(
+        "train",
+        "--env",
+        "drone",
+        "--agent",
+        "unempowered",
+        "--timesteps",
+        "128",
+        "--checkpoint-every",
+        "64",
+        "--seed",
+        "3",
+        "--out",
+        str(out),
+        *TINY,
+    )
+    assert "saved" in first.stdout
+    again = run("train", "--resume", "--timesteps", "192", "--out", str(out), "--no-progress")
+    assert "resuming" in again.stdout and "at step 128" in again.stdout
+    return out
+
+
+def test_training_saves_checkpoints_a_model_that_reloads_and_a_curve(drone_run):
+    settings = json.loads((drone_run / "run.json").read_text())
+    assert settings["env"] == "drone" and settings["agent"] == "unempowered"
+    assert settings["net"] == [32, 32] and settings["use_sde"] is True
+    names = {p.name for p in (drone_run / "checkpoints").iterdir()}
+    assert {"ppo_64_steps.zip", "ppo_128_steps.zip", "ppo_192_steps.zip"} <= names
+    model = PPO.load(drone_run / "model.zip", device="cpu")
+    assert model.num_timesteps == 192  # the resumed run went on from 128, not from 0
+    assert model.n_steps == 64 and model.gamma == 0.99 and model.use_sde
+    obs = np.zeros(model.observation_space.shape, dtype=np.float32)
+    action, _ = model.predict(obs, deterministic=True)
+    assert action.shape == (2,) and np.all(np.abs(action) <= 1.0)
+    assert (drone_run / "training.png").stat().st_size > 10_000
+    assert any((drone_run / "tb").rglob("events.out.tfevents.*"))
+
+
+def test_a_second_run_into_the_same_directory_is_refused(drone_run):
+    proc = run("train", "--timesteps", "64", "--out", str(drone_run), ok=False)
+    assert "already holds a run" in proc.stderr
+
+
+def test_empowered_training_with_two_envs_each_with_its_own_node(tmp_path):
+    out = tmp_path / "emp"
+    proc = run(
+        "train",
+        "--env",
+        "drone",
+        "--agent",
+        "empowered",
+        "--c",
+        "0.5",
+        "--n-envs",
+        "2",
+        "--timesteps",
+        "128",
+        "--out",
+        str(out),
+        *TINY,
+    )
+    # Each rollout line reports the mean empowerment the nodes returned: finite numbers.
+    rollouts = [ln for ln in proc.stdout.splitlines() if ln.startswith("steps")]
+    assert len(rollouts) == 1, proc.stdout  # 2 envs × 64 steps
+    empowerment = float(rollouts[0].split("empowerment")[1].split()[0])
+    assert np.isfinite(empowerment)
+    assert PPO.load(out / "model.zip", device="cpu").num_timesteps == 128
+    assert json.loads((out / "run.json").read_text())["c"] == 0.5
+
+
+def test_evaluation_cli_writes_the_tables_and_plots(drone_run, tmp_path):
+    out = tmp_path / "eval"
+    proc = run(
+        "evaluate",
+        "--model",
+        str(drone_run),
+        "--model",
+        str(drone_run / "checkpoints" / "ppo_64_steps.zip"),
+        "--label",
+        "final",
+        "--label",
+        "early",
+        "--episodes",
+        "2",
+        "--out",
+        str(out),
+    )
+    assert "final: 2 episodes on drone" in proc.stdout
+    md = (out / "results.md").read_text()
+    assert "| Agent | Success rate | Avg. clear time (s) |" in md
+    assert "| final |" in md and "| early |" in md
+    assert "Decrease in time near obstacles relative to final" in md
+    doc = json.loads((out / "results.json").read_text())
+    assert doc["env"] == "drone"
+    for label in ("final", "early"):
+        eps = doc["episodes"][label]
+        assert [e["config"] for e in eps] == [0, 1]
+        assert all(0 < e["duration"] <= 30.0 + 1e-9 for e in eps)
+        assert doc["summaries"][label]["episodes"] == 2
+    for png in ("paths.png", "time_near_obstacle.png"):
+        assert (out / png).stat().st_size > 10_000

@@ -78,14 +78,19 @@ MAZE_MAP = (
 """The maze, top row first: ``#`` wall, ``S`` start cell, ``G`` goal cell, ``.`` free."""
 
 BALL_RADIUS = 0.1
+"""The ball's radius (m), also its centre's height and the node's ``robot_radius``."""
 BALL_MASS = 1.0
+"""The ball's mass (kg); the force bound scales with it, so the motion does not depend on it."""
 MAX_ACCELERATION = 5.0
 """A (m/s²): the force bound per axis over the ball's mass, and the node's ``max_acceleration``."""
 HORIZON = 0.8
 """The node's horizon T (s): the stopping time from 4 m/s at A (the module docstring says why)."""
 EPISODE_STEPS = 300
+"""Control steps per episode (10 s at 30 Hz), as the prototype's 300 steps."""
 SUCCESS_RADIUS = 0.3
+"""How close (m) to the goal counts as reaching it."""
 WALL_HEIGHT = 0.5
+"""Height (m) of the wall boxes: above the ball and the LiDAR plane."""
 
 NODE_PARAMS = {
     "model": "point_mass",
@@ -97,6 +102,7 @@ NODE_PARAMS = {
 """`cstep node` parameters for the maze's ball; pass them to a bridge given to the env."""
 
 XY = tuple[float, float]
+"""A point in the plane, (x, y), metres."""
 
 
 @dataclass(frozen=True)

@@ -33,7 +33,8 @@ T          at rest              2 m/s                4 m/s
 (free areas at rest, T = 0.8 s: 1.9 vs 8.5 m²). At 0.5 s the ±0.625 m reach barely exceeds the
 corridor's ±0.4 m of free play and the routes differ by 0.4 nats; at 0.3 s they do not differ at
 all. At 0.8 s the corridor is 1.5 nats (4.4× in area) less empowered at every speed; 1.0 s adds
-little and reaches past the 3 m LiDAR from 2 m/s on (forward reach vT + A·T²/2).
+little, and its forward reach vT + A·T²/2 passes the 3 m LiDAR (unseen = occupied) from 0.5 m/s
+on, where 0.8 s stays inside it up to 1.75 m/s.
 
 Observation (184 values, float32): goal − position (2, m), velocity (2, m/s), the 180 LiDAR
 ranges clipped to [0, 3] m (no return = 3 m), from the ball's centre. ``info``: as the drone env's

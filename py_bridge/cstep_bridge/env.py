@@ -7,7 +7,11 @@ the current position at the fixed 1 m altitude and tracked by the PID for one 30
 Reward: ``exp(−‖p − goal‖)`` (``empowered=False``) or the node's empowered reward
 ``exp(−‖p − goal‖) · log(c · λ(R_free))`` for exactly this state. Terminates on contact or tilt
 > 0.9 rad; truncates at 30 s. ``info``: success (came within ``success_radius`` of the goal),
-collision, time, min_obstacle_distance (centre to nearest wall or block face, m).
+collision, time, min_obstacle_distance (centre to nearest wall or block face, m),
+distance_to_goal (m), position (x, y, m).
+
+:class:`EmpoweredRewardEnv` holds what this env shares with the point maze
+(:mod:`~cstep_bridge.maze`): the choice of reward and the bridge to the node.
 """
 
 from __future__ import annotations
@@ -19,13 +23,80 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from .sim import CONTROL_HZ, LIDAR_BEAMS, LIDAR_RANGE, Arena, DroneSim, DroneState
+from .sim import CONTROL_HZ, Arena, DroneSim, DroneState
+from .world import LIDAR_BEAMS, LIDAR_RANGE, clipped_ranges
 
 MAX_TILT = 0.9
 EPISODE_SECONDS = 30.0
 
 
-class CStepDroneEnv(gym.Env):
+class EmpoweredRewardEnv(gym.Env):
+    """Base of the drone and maze envs: the plain reward ``exp(−‖p − goal‖)`` or, when empowered,
+    the node's empowered reward for exactly the current state.
+
+    ``bridge``: a :class:`~cstep_bridge.ros_io.RosBridge` to use (not closed by this env);
+    otherwise an empowered env starts its own bridge and private node, with ``node_params``
+    overriding the node's parameters, on first use.
+    """
+
+    def __init__(
+        self,
+        empowered: bool,
+        safety_coefficient: float,
+        *,
+        bridge,
+        reward_mode: str,
+        domain_id: int | None,
+        reward_timeout: float,
+        node_params: dict[str, str] | None = None,
+    ) -> None:
+        """Checks ``safety_coefficient`` > 0 and keeps what starting a bridge needs."""
+        super().__init__()
+        if safety_coefficient <= 0:
+            raise ValueError(f"safety_coefficient must be > 0, not {safety_coefficient}")
+        self.empowered = empowered
+        self.safety_coefficient = float(safety_coefficient)
+        self._bridge = bridge
+        self._own_bridge = None
+        self._bridge_args = {
+            "mode": reward_mode,
+            "domain_id": domain_id,
+            "safety_coefficient": self.safety_coefficient,
+            "timeout": reward_timeout,
+            "node_params": node_params,
+        }
+
+    @property
+    def bridge(self):
+        """The bridge given, else this env's own (started here, with its node, on first use)."""
+        if self._bridge is None and self._own_bridge is None:
+            from .ros_io import RosBridge  # rclpy only when empowered
+
+            self._own_bridge = RosBridge(**self._bridge_args)
+        return self._bridge or self._own_bridge
+
+    def _reward(
+        self, state: DroneState, ranges: np.ndarray, t: float, distance: float, info: dict
+    ) -> float:
+        """The reward of ``state`` (``distance`` from the goal) with scan ``ranges`` at sim time
+        ``t``; an empowered env adds the node's task_reward, empowerment and reward_valid to
+        ``info``."""
+        if not self.empowered:
+            return math.exp(-distance)
+        answer = self.bridge.evaluate(state, ranges, t)
+        info["task_reward"] = answer.task_reward
+        info["empowerment"] = answer.empowerment
+        info["reward_valid"] = answer.valid
+        return answer.reward
+
+    def close(self) -> None:
+        """Stops this env's own bridge and node, if it started them."""
+        if self._own_bridge is not None:
+            self._own_bridge.close()
+            self._own_bridge = None
+
+
+class CStepDroneEnv(EmpoweredRewardEnv):
     """The drone arena with the plain navigation reward or the C-STEP empowered reward."""
 
     metadata: ClassVar[dict] = {"render_modes": ["human"], "render_fps": CONTROL_HZ}
@@ -45,27 +116,22 @@ class CStepDroneEnv(gym.Env):
         render_mode: str | None = None,
         reward_timeout: float = 5.0,
     ) -> None:
-        """``bridge``: a :class:`~cstep_bridge.ros_io.RosBridge` to use (not closed by this env);
-        otherwise an empowered env starts its own bridge and private node on first reset.
-        ``arena``: a fixed configuration; None draws one per episode from the reset seed."""
-        super().__init__()
-        if safety_coefficient <= 0:
-            raise ValueError(f"safety_coefficient must be > 0, not {safety_coefficient}")
-        self.empowered = empowered
-        self.safety_coefficient = float(safety_coefficient)
+        """``bridge``: see :class:`EmpoweredRewardEnv`; an empowered env without one starts its
+        own on first reset. ``arena``: a fixed configuration; None draws one per episode from the
+        reset seed."""
+        super().__init__(
+            empowered,
+            safety_coefficient,
+            bridge=bridge,
+            reward_mode=reward_mode,
+            domain_id=domain_id,
+            reward_timeout=reward_timeout,
+        )
         self.max_offset = max_offset
         self.max_steps = round(episode_seconds * CONTROL_HZ)
         self.success_radius = success_radius
         self.fixed_arena = arena
         self.render_mode = render_mode
-        self._bridge = bridge
-        self._own_bridge = None
-        self._bridge_args = {
-            "mode": reward_mode,
-            "domain_id": domain_id,
-            "safety_coefficient": self.safety_coefficient,
-            "timeout": reward_timeout,
-        }
         self.sim = DroneSim(arena or Arena(), gui=render_mode == "human")
         high = np.concatenate(
             [np.full(3, 10.0), np.full(3, 20.0), np.full(3, math.pi), np.full(3, 100.0)]
@@ -80,19 +146,16 @@ class CStepDroneEnv(gym.Env):
         self.success = False
 
     # --- helpers -------------------------------------------------------------------------
-    @property
-    def bridge(self):
-        if self._bridge is None and self._own_bridge is None:
-            from .ros_io import RosBridge  # rclpy only when empowered
-
-            self._own_bridge = RosBridge(**self._bridge_args)
-        return self._bridge or self._own_bridge
-
     def _observe(self, state: DroneState, ranges: np.ndarray) -> np.ndarray:
         goal = self.sim.arena.goal
-        lidar = np.clip(np.where(np.isfinite(ranges), ranges, LIDAR_RANGE), 0.0, LIDAR_RANGE)
         obs = np.concatenate(
-            [goal - state.position, state.velocity, state.rpy, state.body_angular_velocity, lidar]
+            [
+                goal - state.position,
+                state.velocity,
+                state.rpy,
+                state.body_angular_velocity,
+                clipped_ranges(ranges),
+            ]
         )
         low, high = self.observation_space.low, self.observation_space.high
         return np.clip(obs, low, high).astype(np.float32)
@@ -104,6 +167,7 @@ class CStepDroneEnv(gym.Env):
             "time": self.sim.time,
             "min_obstacle_distance": self.sim.min_obstacle_distance(state),
             "distance_to_goal": float(np.linalg.norm(self.sim.arena.goal - state.position)),
+            "position": (float(state.position[0]), float(state.position[1])),
         }
 
     # --- gymnasium API -------------------------------------------------------------------
@@ -137,20 +201,12 @@ class CStepDroneEnv(gym.Env):
         distance = float(np.linalg.norm(self.sim.arena.goal - state.position))
         self.success = self.success or distance < self.success_radius
         info = self._info(state, collision)
-        if self.empowered:
-            answer = self.bridge.evaluate(state, ranges, self.sim.time)
-            reward = answer.reward
-            info["task_reward"] = answer.task_reward
-            info["empowerment"] = answer.empowerment
-            info["reward_valid"] = answer.valid
-        else:
-            reward = math.exp(-distance)
+        reward = self._reward(state, ranges, self.sim.time, distance, info)
         terminated = collision or state.tilt > MAX_TILT
         truncated = not terminated and self.steps >= self.max_steps
         return self._observe(state, ranges), float(reward), terminated, truncated, info
 
     def close(self) -> None:
-        if self._own_bridge is not None:
-            self._own_bridge.close()
-            self._own_bridge = None
+        """Stops the env's own bridge, if any, and the simulation."""
+        super().close()
         self.sim.close()

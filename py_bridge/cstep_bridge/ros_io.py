@@ -46,13 +46,8 @@ from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy, qos_profi
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import LaserScan
 
-from .sim import (
-    LIDAR_ANGLE_INCREMENT,
-    LIDAR_ANGLE_MIN,
-    LIDAR_RANGE,
-    LIDAR_RANGE_MIN,
-    DroneState,
-)
+from .sim import DroneState
+from .world import LIDAR_ANGLE_INCREMENT, LIDAR_ANGLE_MIN, LIDAR_RANGE, LIDAR_RANGE_MIN
 
 REPO = Path(__file__).resolve().parents[2]
 DEFAULT_CONFIG = REPO / "config" / "cstep.yaml"

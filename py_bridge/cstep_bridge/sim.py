@@ -23,6 +23,13 @@ from pathlib import Path
 import numpy as np
 import pybullet as p
 
+from .world import (
+    LIDAR_BEAMS,  # noqa: F401 (re-exported: the drone carries the shared LiDAR)
+    create_box,
+    lidar_scan,
+    rect_distance,
+)
+
 REPO = Path(__file__).resolve().parents[2]
 DEFAULT_URDF = REPO / "urdf" / "cf2x.urdf"
 
@@ -30,13 +37,6 @@ G = 9.8
 PHYSICS_HZ = 240
 CONTROL_HZ = 30
 STEPS_PER_CONTROL = PHYSICS_HZ // CONTROL_HZ  # 8
-
-# The LiDAR of the paper: 180 beams over 360°, 3 m range.
-LIDAR_BEAMS = 180
-LIDAR_RANGE = 3.0
-LIDAR_RANGE_MIN = 0.02
-LIDAR_ANGLE_MIN = -math.pi
-LIDAR_ANGLE_INCREMENT = 2 * math.pi / LIDAR_BEAMS
 
 
 @dataclass(frozen=True)
@@ -119,13 +119,7 @@ class Arena:
         x, y = float(xy[0]), float(xy[1])
         x0, y0, x1, y1 = self.bounds
         walls = min(x - x0, x1 - x, y - y0, y1 - y)
-        bx0, by0, bx1, by1 = self.block
-        dx, dy = max(bx0 - x, 0.0, x - bx1), max(by0 - y, 0.0, y - by1)
-        if dx == 0.0 and dy == 0.0:
-            block = -min(x - bx0, bx1 - x, y - by0, by1 - y)
-        else:
-            block = math.hypot(dx, dy)
-        return min(walls, block)
+        return min(walls, rect_distance(x, y, self.block))
 
 
 @dataclass
@@ -235,14 +229,6 @@ class DroneSim:
         self.reset(self.arena)
 
     # --- world ---------------------------------------------------------------------------
-    def _box(self, lo: tuple[float, ...], hi: tuple[float, ...], rgba=(0.6, 0.6, 0.65, 1)) -> int:
-        half = [(h - lo_) / 2 for lo_, h in zip(lo, hi, strict=True)]
-        centre = [(h + lo_) / 2 for lo_, h in zip(lo, hi, strict=True)]
-        cid = self.client
-        col = p.createCollisionShape(p.GEOM_BOX, halfExtents=half, physicsClientId=cid)
-        vis = p.createVisualShape(p.GEOM_BOX, halfExtents=half, rgbaColor=rgba, physicsClientId=cid)
-        return p.createMultiBody(0, col, vis, centre, physicsClientId=cid)
-
     def reset(self, arena: Arena | None = None) -> DroneState:
         """Rebuild the world for ``arena`` and put the drone at rest at its start."""
         if arena is not None:
@@ -254,16 +240,18 @@ class DroneSim:
         a = self.arena
         x0, y0, x1, y1 = a.bounds
         t, h = 0.1, a.height
-        floor = self._box((x0 - t, y0 - t, -t), (x1 + t, y1 + t, 0.0), (0.8, 0.8, 0.8, 1))
-        ceiling = self._box((x0 - t, y0 - t, h), (x1 + t, y1 + t, h + t), (0.8, 0.8, 0.8, 0.1))
+        floor = create_box(cid, (x0 - t, y0 - t, -t), (x1 + t, y1 + t, 0.0), (0.8, 0.8, 0.8, 1))
+        ceiling = create_box(
+            cid, (x0 - t, y0 - t, h), (x1 + t, y1 + t, h + t), (0.8, 0.8, 0.8, 0.1)
+        )
         walls = [
-            self._box((x0 - t, y0 - t, 0), (x0, y1 + t, h)),
-            self._box((x1, y0 - t, 0), (x1 + t, y1 + t, h)),
-            self._box((x0, y0 - t, 0), (x1, y0, h)),
-            self._box((x0, y1, 0), (x1, y1 + t, h)),
+            create_box(cid, (x0 - t, y0 - t, 0), (x0, y1 + t, h)),
+            create_box(cid, (x1, y0 - t, 0), (x1 + t, y1 + t, h)),
+            create_box(cid, (x0, y0 - t, 0), (x1, y0, h)),
+            create_box(cid, (x0, y1, 0), (x1, y1 + t, h)),
         ]
         bx0, by0, bx1, by1 = a.block
-        block = self._box((bx0, by0, 0), (bx1, by1, h), (0.8, 0.3, 0.2, 1))
+        block = create_box(cid, (bx0, by0, 0), (bx1, by1, h), (0.8, 0.3, 0.2, 1))
         self.static = [floor, ceiling]
         self.obstacles = [*walls, block]
         self.block_id = block
@@ -301,19 +289,7 @@ class DroneSim:
         a levelled 2D scanner at the drone's centre); +inf where nothing is within 3 m (REP 117).
         """
         s = state or self.state()
-        yaw = s.rpy[2]
-        angles = LIDAR_ANGLE_MIN + LIDAR_ANGLE_INCREMENT * np.arange(LIDAR_BEAMS) + yaw
-        dirs = np.column_stack([np.cos(angles), np.sin(angles), np.zeros(LIDAR_BEAMS)])
-        # Rays start just outside the drone's own collision shape, so they never hit it.
-        r0 = self.params.radius + 0.01
-        starts = s.position + r0 * dirs
-        ends = s.position + LIDAR_RANGE * dirs
-        hits = p.rayTestBatch(starts.tolist(), ends.tolist(), physicsClientId=self.client)
-        ranges = np.full(LIDAR_BEAMS, np.inf)
-        for i, hit in enumerate(hits):
-            if hit[0] >= 0:
-                ranges[i] = r0 + hit[2] * (LIDAR_RANGE - r0)
-        return ranges
+        return lidar_scan(self.client, s.position, s.rpy[2], self.params.radius + 0.01)
 
     def in_collision(self) -> bool:
         """True when the drone touches anything (walls, block, floor, ceiling)."""

@@ -69,8 +69,9 @@ def cstep_node(ros_domain):
                 proc.wait(timeout=5)
 
 
-def cstep_eval(tmp_path, odom, scan, goal=None) -> dict:
-    """`cstep eval --format json` on these messages (written as rosbridge-style JSON)."""
+def cstep_eval(tmp_path, odom, scan, goal=None, params: dict[str, str] | None = None) -> dict:
+    """`cstep eval --format json` on these messages (written as rosbridge-style JSON), with
+    ``params`` overriding config/cstep.yaml as a node's ``-p name:=value`` would."""
     (tmp_path / "odom.json").write_text(json.dumps(message_to_ordereddict(odom)))
     s = message_to_ordereddict(scan)
     s["ranges"] = [None if math.isinf(r) else r for r in s["ranges"]]
@@ -78,7 +79,10 @@ def cstep_eval(tmp_path, odom, scan, goal=None) -> dict:
     command = [str(cstep_binary()), "eval", "--config", str(CONFIG), "--format", "json"]
     command += ["--odom", str(tmp_path / "odom.json"), "--scan", str(tmp_path / "scan.json")]
     if goal is not None:
-        command += ["--goal", ",".join(repr(float(g)) for g in goal)]
+        # One argument, `--goal=X,Y,Z`: a separate value starting with "-" would read as a flag.
+        command.append("--goal=" + ",".join(repr(float(g)) for g in goal))
+    for name, value in (params or {}).items():
+        command += ["-p", f"{name}:={value}"]
     out = subprocess.run(command, capture_output=True, text=True, check=True)
     return json.loads(out.stdout)
 

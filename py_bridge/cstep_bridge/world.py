@@ -1,0 +1,71 @@
+"""What the drone arena and the point maze share: static boxes, the 2D LiDAR and wall clearance.
+
+Both worlds are built from axis-aligned boxes, carry the paper's LiDAR (180 beams over 360°, 3 m,
++inf where nothing returns) at the robot's centre, and measure how close the robot's centre is to
+rectangular obstacles in the plane. Keeping those here means the two simulations sense and measure
+their worlds with the same code.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pybullet as p
+
+# The LiDAR of the paper: 180 beams over 360°, 3 m range.
+LIDAR_BEAMS = 180
+LIDAR_RANGE = 3.0
+LIDAR_RANGE_MIN = 0.02
+LIDAR_ANGLE_MIN = -math.pi
+LIDAR_ANGLE_INCREMENT = 2 * math.pi / LIDAR_BEAMS
+
+Rect = tuple[float, float, float, float]
+"""An axis-aligned rectangle in the plane: (x0, y0, x1, y1), metres, x0 < x1 and y0 < y1."""
+
+
+def create_box(
+    client: int,
+    lo: tuple[float, ...],
+    hi: tuple[float, ...],
+    rgba: tuple[float, float, float, float] = (0.6, 0.6, 0.65, 1),
+) -> int:
+    """A static (massless) box spanning corners ``lo`` to ``hi`` (x, y, z); its body id."""
+    half = [(h - lo_) / 2 for lo_, h in zip(lo, hi, strict=True)]
+    centre = [(h + lo_) / 2 for lo_, h in zip(lo, hi, strict=True)]
+    col = p.createCollisionShape(p.GEOM_BOX, halfExtents=half, physicsClientId=client)
+    vis = p.createVisualShape(p.GEOM_BOX, halfExtents=half, rgbaColor=rgba, physicsClientId=client)
+    return p.createMultiBody(0, col, vis, centre, physicsClientId=client)
+
+
+def lidar_scan(client: int, position: np.ndarray, yaw: float, r0: float) -> np.ndarray:
+    """LiDAR ranges (m) from ``position`` for bearings angle_min + i·increment relative to ``yaw``
+    (a levelled 2D scanner); +inf where nothing is within 3 m (REP 117).
+
+    Rays start ``r0`` from the centre — just outside the robot's own collision shape, so they
+    never hit it — and ranges are measured from the centre.
+    """
+    angles = LIDAR_ANGLE_MIN + LIDAR_ANGLE_INCREMENT * np.arange(LIDAR_BEAMS) + yaw
+    dirs = np.column_stack([np.cos(angles), np.sin(angles), np.zeros(LIDAR_BEAMS)])
+    starts = position + r0 * dirs
+    ends = position + LIDAR_RANGE * dirs
+    hits = p.rayTestBatch(starts.tolist(), ends.tolist(), physicsClientId=client)
+    ranges = np.full(LIDAR_BEAMS, np.inf)
+    for i, hit in enumerate(hits):
+        if hit[0] >= 0:
+            ranges[i] = r0 + hit[2] * (LIDAR_RANGE - r0)
+    return ranges
+
+
+def clipped_ranges(ranges: np.ndarray) -> np.ndarray:
+    """The ranges as an observation: no return (+inf) reads as the 3 m range, all in [0, 3] m."""
+    return np.clip(np.where(np.isfinite(ranges), ranges, LIDAR_RANGE), 0.0, LIDAR_RANGE)
+
+
+def rect_distance(x: float, y: float, rect: Rect) -> float:
+    """Distance (m) from the point (x, y) to the rectangle ``rect``; minus the depth inside it."""
+    x0, y0, x1, y1 = rect
+    dx, dy = max(x0 - x, 0.0, x - x1), max(y0 - y, 0.0, y - y1)
+    if dx == 0.0 and dy == 0.0:
+        return -min(x - x0, x1 - x, y - y0, y1 - y)
+    return math.hypot(dx, dy)

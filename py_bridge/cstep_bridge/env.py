@@ -66,6 +66,27 @@ class EmpoweredRewardEnv(gym.Env):
             "node_params": node_params,
         }
 
+    control_period = 1.0 / CONTROL_HZ
+    """Seconds per env step (the 30 Hz control rate)."""
+    robot_radius: float
+    """The robot's collision radius (m): obstacle distances minus this are surface gaps."""
+
+    def _distance(self, state: DroneState) -> float:
+        """Distance (m) from ``state`` to the goal."""
+        return float(np.linalg.norm(self.sim.goal - state.position))
+
+    def _info(self, state: DroneState, collision: bool) -> dict[str, Any]:
+        """What every step reports: success so far, collision, sim time, centre distance to the
+        nearest obstacle, distance to the goal, and the position (x, y)."""
+        return {
+            "success": self.success,
+            "collision": collision,
+            "time": self.sim.time,
+            "min_obstacle_distance": self.sim.min_obstacle_distance(state),
+            "distance_to_goal": self._distance(state),
+            "position": (float(state.position[0]), float(state.position[1])),
+        }
+
     @property
     def bridge(self):
         """The bridge given, else this env's own (started here, with its node, on first use)."""
@@ -133,6 +154,7 @@ class CStepDroneEnv(EmpoweredRewardEnv):
         self.fixed_arena = arena
         self.render_mode = render_mode
         self.sim = DroneSim(arena or Arena(), gui=render_mode == "human")
+        self.robot_radius = self.sim.params.radius
         high = np.concatenate(
             [np.full(3, 10.0), np.full(3, 20.0), np.full(3, math.pi), np.full(3, 100.0)]
         )
@@ -159,16 +181,6 @@ class CStepDroneEnv(EmpoweredRewardEnv):
         )
         low, high = self.observation_space.low, self.observation_space.high
         return np.clip(obs, low, high).astype(np.float32)
-
-    def _info(self, state: DroneState, collision: bool) -> dict[str, Any]:
-        return {
-            "success": self.success,
-            "collision": collision,
-            "time": self.sim.time,
-            "min_obstacle_distance": self.sim.min_obstacle_distance(state),
-            "distance_to_goal": float(np.linalg.norm(self.sim.arena.goal - state.position)),
-            "position": (float(state.position[0]), float(state.position[1])),
-        }
 
     # --- gymnasium API -------------------------------------------------------------------
     def reset(self, *, seed: int | None = None, options: dict | None = None):
@@ -198,7 +210,7 @@ class CStepDroneEnv(EmpoweredRewardEnv):
         self.steps += 1
         ranges = self.sim.scan(state)
         collision = self.sim.in_collision()
-        distance = float(np.linalg.norm(self.sim.arena.goal - state.position))
+        distance = self._distance(state)
         self.success = self.success or distance < self.success_radius
         info = self._info(state, collision)
         reward = self._reward(state, ranges, self.sim.time, distance, info)

@@ -45,7 +45,7 @@ from __future__ import annotations
 
 import re
 from dataclasses import dataclass
-from typing import Any, ClassVar
+from typing import ClassVar
 
 import numpy as np
 import pybullet as p
@@ -334,6 +334,7 @@ class CStepMazeEnv(EmpoweredRewardEnv):
         self.fixed_config = config
         self.render_mode = render_mode
         self.sim = MazeSim(gui=render_mode == "human")
+        self.robot_radius = BALL_RADIUS
         high = np.array([10.0, 10.0, 20.0, 20.0])
         self.observation_space = spaces.Box(
             low=np.concatenate([-high, np.zeros(LIDAR_BEAMS)]).astype(np.float32),
@@ -350,19 +351,6 @@ class CStepMazeEnv(EmpoweredRewardEnv):
         )
         low, high = self.observation_space.low, self.observation_space.high
         return np.clip(obs, low, high).astype(np.float32)
-
-    def _info(self, state: DroneState, collision: bool) -> dict[str, Any]:
-        return {
-            "success": self.success,
-            "collision": collision,
-            "time": self.sim.time,
-            "min_obstacle_distance": self.sim.min_obstacle_distance(state),
-            "distance_to_goal": self._distance(state),
-            "position": (float(state.position[0]), float(state.position[1])),
-        }
-
-    def _distance(self, state: DroneState) -> float:
-        return float(np.linalg.norm(self.sim.goal - state.position))
 
     def reset(self, *, seed: int | None = None, options: dict | None = None):
         """Start an episode: ``options["config"]``, else the env's fixed config, else one drawn

@@ -278,6 +278,11 @@ class DroneSim:
         """Simulation time (s)."""
         return self.physics_steps / PHYSICS_HZ
 
+    @property
+    def goal(self) -> np.ndarray:
+        """The arena's goal (x, y, z)."""
+        return self.arena.goal
+
     def state(self) -> DroneState:
         pos, quat = p.getBasePositionAndOrientation(self.drone, physicsClientId=self.client)
         vel, ang = p.getBaseVelocity(self.drone, physicsClientId=self.client)

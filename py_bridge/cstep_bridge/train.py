@@ -10,7 +10,8 @@ hear each other.
 
 The run directory ``--out`` holds:
 
-- ``run.json``: the settings, written when the run starts; ``--resume`` continues with them.
+- ``run.json``: the settings, written when the run starts; ``--resume`` continues with them
+  (only ``--timesteps``, ``--n-envs`` and how it runs may change).
 - ``checkpoints/ppo_<steps>_steps.zip`` every ``--checkpoint-every`` steps, and ``model.zip`` at the end.
 - ``tb/``: TensorBoard logs (``tensorboard --logdir DIR/tb``): SB3's losses and episode rewards,
   plus ``cstep/`` success and collision rates, mean empowerment and mean obstacle distance.
@@ -61,6 +62,7 @@ RUN_SETTINGS = (
     "clip_range",
     "use_sde",
     "reward_mode",
+    "checkpoint_every",
 )
 # Episode fields the Monitor writes and the summaries read.
 INFO_KEYWORDS = ("success", "collision")
@@ -152,8 +154,22 @@ def env_factory(settings: dict[str, Any]):
     return build
 
 
-def _callbacks(out: Path, n_envs: int, checkpoint_every: int):
-    from stable_baselines3.common.callbacks import BaseCallback, CallbackList, CheckpointCallback
+def _callbacks(out: Path, checkpoint_every: int):
+    from stable_baselines3.common.callbacks import BaseCallback, CallbackList
+
+    class Checkpoints(BaseCallback):
+        """Saves ``checkpoints/ppo_<steps>_steps.zip`` each time the run passes a multiple of
+        ``checkpoint_every`` steps. (SB3's CheckpointCallback counts calls since it was created,
+        so after --resume its saves would no longer fall on the run's multiples.)"""
+
+        def _on_training_start(self) -> None:
+            self.next_save = (self.num_timesteps // checkpoint_every + 1) * checkpoint_every
+
+        def _on_step(self) -> bool:
+            if self.num_timesteps >= self.next_save:
+                self.model.save(out / "checkpoints" / f"ppo_{self.num_timesteps}_steps.zip")
+                self.next_save = (self.num_timesteps // checkpoint_every + 1) * checkpoint_every
+            return True
 
     class CStepLog(BaseCallback):
         """Logs success/collision rates, empowerment and obstacle distance for each rollout."""
@@ -193,12 +209,7 @@ def _callbacks(out: Path, n_envs: int, checkpoint_every: int):
             fields["steps/s"] = f"{rate:6.0f}"
             print("  ".join(f"{k} {v}" for k, v in fields.items()), flush=True)
 
-    checkpoints = CheckpointCallback(
-        save_freq=max(checkpoint_every // n_envs, 1),
-        save_path=str(out / "checkpoints"),
-        name_prefix="ppo",
-    )
-    return CallbackList([checkpoints, CStepLog()])
+    return CallbackList([Checkpoints(), CStepLog()])
 
 
 def train(args: argparse.Namespace) -> Path:
@@ -229,6 +240,7 @@ def train(args: argparse.Namespace) -> Path:
         out.mkdir(parents=True, exist_ok=True)
         settings_path.write_text(json.dumps(settings, indent=2) + "\n")
 
+    (out / "checkpoints").mkdir(exist_ok=True)
     torch.set_num_threads(args.torch_threads)
     vec_env = make_vec_env(
         env_factory(settings),
@@ -269,7 +281,7 @@ def train(args: argparse.Namespace) -> Path:
         if remaining > 0:
             model.learn(
                 total_timesteps=remaining,
-                callback=_callbacks(out, args.n_envs, args.checkpoint_every),
+                callback=_callbacks(out, settings["checkpoint_every"]),
                 tb_log_name="ppo",
                 reset_num_timesteps=False,
                 progress_bar=args.progress,

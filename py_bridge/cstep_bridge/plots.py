@@ -54,7 +54,7 @@ def training_curve(monitor_dir: Path, png: Path, title: str = "") -> None:
         ax_r.plot(data[:, 0], data[:, 1], ".", color="0.75", ms=3, label="episode")
         ax_r.plot(steps, _smooth(data[:, 1], window), color="C0", label=f"mean of {window}")
         ax_s.plot(steps, 100 * _smooth(data[:, 2], window), color="C2")
-        ax_r.legend(loc="lower right")
+        ax_r.legend(loc="upper left")
     else:
         ax_r.text(0.5, 0.5, "no episode finished yet", ha="center", transform=ax_r.transAxes)
     ax_r.set_ylabel("episode reward")

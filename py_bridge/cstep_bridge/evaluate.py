@@ -164,16 +164,30 @@ def markdown(
         "|---|---|---:|",
         *(f"| {a.label} | `{a.model}` | {a.steps} |" for a in agents),
         "",
-        "## Success rate and time to clear the obstacle",
-        "",
-        "| Agent | Success rate | Avg. clear time (s) | Collision rate | Cleared |",
-        "|---|---:|---:|---:|---:|",
     ]
-    for label, s in summaries.items():
-        lines.append(
+    if clear_x(env) is None:  # no obstacle to clear: success and collisions only
+        lines += [
+            "## Success rate",
+            "",
+            "| Agent | Success rate | Collision rate |",
+            "|---|---:|---:|",
+        ]
+        lines += [
+            f"| {label} | {s.success_rate:.0%} | {s.collision_rate:.0%} |"
+            for label, s in summaries.items()
+        ]
+    else:
+        lines += [
+            "## Success rate and time to clear the obstacle",
+            "",
+            "| Agent | Success rate | Avg. clear time (s) | Collision rate | Cleared |",
+            "|---|---:|---:|---:|---:|",
+        ]
+        lines += [
             f"| {label} | {s.success_rate:.0%} | {_fmt(s.clear_time, '.2f')} | "
             f"{s.collision_rate:.0%} | {s.cleared}/{s.episodes} |"
-        )
+            for label, s in summaries.items()
+        ]
     if env == "maze":
         lines += [
             "",
@@ -313,6 +327,7 @@ def main(argv: list[str] | None = None) -> int:
                 "collision": e.collision,
                 "duration": e.duration,
                 "min_gap": float(e.gap.min()),
+                "end": [round(float(v), 3) for v in e.xy[-1]],
                 **e.extra,
             }
             for e in eps

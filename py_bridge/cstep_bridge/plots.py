@@ -91,6 +91,7 @@ class MapPanel:
 def paths_figure(panels: Sequence[MapPanel], labels: Sequence[str], png: Path, cols: int = 3):
     """Top-down maps with each agent's paths in its own colour (× marks a collision)."""
     colours = {label: f"C{i}" for i, label in enumerate(labels)}
+    cols = min(cols, len(panels))
     rows = -(-len(panels) // cols)
     x0, y0, x1, y1 = panels[0].bounds
     aspect = (y1 - y0) / (x1 - x0)

@@ -52,10 +52,11 @@ import pybullet as p
 from gymnasium import spaces
 
 from .env import EmpoweredRewardEnv
-from .sim import CONTROL_HZ, PHYSICS_HZ, STEPS_PER_CONTROL, DroneState
+from .sim import CONTROL_HZ, STEPS_PER_CONTROL, DroneState
 from .world import (
     LIDAR_BEAMS,
     LIDAR_RANGE,
+    PhysicsWorld,
     Rect,
     clipped_ranges,
     create_box,
@@ -200,24 +201,21 @@ configurations = LAYOUT.configurations
 route_taken = LAYOUT.route_taken
 
 
-class MazeSim:
+class MazeSim(PhysicsWorld):
     """The ball in the maze. ``step(force)`` advances one 30 Hz control step."""
 
     def __init__(self, layout: MazeLayout = LAYOUT, gui: bool = False) -> None:
         """Connects a PyBullet client (GUI or headless) and builds the first configuration."""
+        super().__init__(gui)
         self.layout = layout
-        self.client = p.connect(p.GUI if gui else p.DIRECT)
         self.ball = -1
-        self.physics_steps = 0
         self.reset(layout.configurations()[0])
 
     def reset(self, config: MazeConfig) -> DroneState:
         """Rebuild the maze and put the ball at rest at ``config``'s start."""
         self.config = config
         cid = self.client
-        p.resetSimulation(physicsClientId=cid)
-        p.setGravity(0, 0, 0, physicsClientId=cid)
-        p.setTimeStep(1.0 / PHYSICS_HZ, physicsClientId=cid)
+        self._restart(0.0)
         for x0, y0, x1, y1 in self.layout.walls:
             create_box(cid, (x0, y0, 0.0), (x1, y1, WALL_HEIGHT))
         col = p.createCollisionShape(p.GEOM_SPHERE, radius=BALL_RADIUS, physicsClientId=cid)
@@ -240,19 +238,7 @@ class MazeSim:
             activationState=p.ACTIVATION_STATE_DISABLE_SLEEPING,
             physicsClientId=cid,
         )
-        self.physics_steps = 0
         return self.state()
-
-    def close(self) -> None:
-        """Disconnects the PyBullet client."""
-        if self.client >= 0:
-            p.disconnect(self.client)
-            self.client = -1
-
-    @property
-    def time(self) -> float:
-        """Simulation time (s)."""
-        return self.physics_steps / PHYSICS_HZ
 
     @property
     def goal(self) -> np.ndarray:

@@ -25,6 +25,8 @@ import pybullet as p
 
 from .world import (
     LIDAR_BEAMS,  # noqa: F401 (re-exported: the drone carries the shared LiDAR)
+    PHYSICS_HZ,
+    PhysicsWorld,
     create_box,
     lidar_scan,
     rect_distance,
@@ -34,7 +36,6 @@ REPO = Path(__file__).resolve().parents[2]
 DEFAULT_URDF = REPO / "urdf" / "cf2x.urdf"
 
 G = 9.8
-PHYSICS_HZ = 240
 CONTROL_HZ = 30
 STEPS_PER_CONTROL = PHYSICS_HZ // CONTROL_HZ  # 8
 
@@ -207,7 +208,7 @@ class PIDController:
         return np.minimum(rpm, pr.max_rpm)
 
 
-class DroneSim:
+class DroneSim(PhysicsWorld):
     """The drone in the arena. ``step(waypoint)`` advances one 30 Hz control step."""
 
     def __init__(
@@ -216,16 +217,15 @@ class DroneSim:
         gui: bool = False,
         urdf: Path | str = DEFAULT_URDF,
     ) -> None:
+        super().__init__(gui)
         self.params = DroneParams.from_urdf(urdf)
         self.urdf = str(urdf)
-        self.client = p.connect(p.GUI if gui else p.DIRECT)
         self.controller = PIDController(self.params)
         self.arena = arena or Arena()
         self.obstacles: list[int] = []
         self.static: list[int] = []
         self.drone = -1
         self.rpm = np.zeros(4)
-        self.physics_steps = 0
         self.reset(self.arena)
 
     # --- world ---------------------------------------------------------------------------
@@ -234,9 +234,7 @@ class DroneSim:
         if arena is not None:
             self.arena = arena
         cid = self.client
-        p.resetSimulation(physicsClientId=cid)
-        p.setGravity(0, 0, -G, physicsClientId=cid)
-        p.setTimeStep(1.0 / PHYSICS_HZ, physicsClientId=cid)
+        self._restart(G)
         a = self.arena
         x0, y0, x1, y1 = a.bounds
         t, h = 0.1, a.height
@@ -263,21 +261,10 @@ class DroneSim:
         )
         self.controller.reset()
         self.target = a.start.copy()
-        self.physics_steps = 0
         self.rpm = np.full(4, self.params.hover_rpm)
         return self.state()
 
-    def close(self) -> None:
-        if self.client >= 0:
-            p.disconnect(self.client)
-            self.client = -1
-
     # --- state and sensors ---------------------------------------------------------------
-    @property
-    def time(self) -> float:
-        """Simulation time (s)."""
-        return self.physics_steps / PHYSICS_HZ
-
     @property
     def goal(self) -> np.ndarray:
         """The arena's goal (x, y, z)."""

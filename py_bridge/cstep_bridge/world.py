@@ -20,6 +20,9 @@ LIDAR_RANGE_MIN = 0.02
 LIDAR_ANGLE_MIN = -math.pi
 LIDAR_ANGLE_INCREMENT = 2 * math.pi / LIDAR_BEAMS
 
+PHYSICS_HZ = 240
+"""Physics steps per second in every world (the paper's 240 Hz)."""
+
 Rect = tuple[float, float, float, float]
 """An axis-aligned rectangle in the plane: (x0, y0, x1, y1), metres, x0 < x1 and y0 < y1."""
 
@@ -69,3 +72,31 @@ def rect_distance(x: float, y: float, rect: Rect) -> float:
     if dx == 0.0 and dy == 0.0:
         return -min(x - x0, x1 - x, y - y0, y1 - y)
     return math.hypot(dx, dy)
+
+
+class PhysicsWorld:
+    """A PyBullet connection of its own (headless, or a window with ``gui``) and its clock: the
+    base of the drone's and the ball's simulations."""
+
+    def __init__(self, gui: bool) -> None:
+        """Connects the client; the subclass builds its world with :meth:`_restart`."""
+        self.client = p.connect(p.GUI if gui else p.DIRECT)
+        self.physics_steps = 0
+
+    def _restart(self, gravity: float) -> None:
+        """Empties the world and restarts the clock: gravity ``gravity`` m/s² down, 240 Hz."""
+        p.resetSimulation(physicsClientId=self.client)
+        p.setGravity(0, 0, -gravity, physicsClientId=self.client)
+        p.setTimeStep(1.0 / PHYSICS_HZ, physicsClientId=self.client)
+        self.physics_steps = 0
+
+    @property
+    def time(self) -> float:
+        """Simulation time (s)."""
+        return self.physics_steps / PHYSICS_HZ
+
+    def close(self) -> None:
+        """Disconnects the PyBullet client (once)."""
+        if self.client >= 0:
+            p.disconnect(self.client)
+            self.client = -1

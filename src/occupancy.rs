@@ -307,46 +307,96 @@ impl Occupancy {
     pub fn mark_collisions(&self, x: &[f32], y: &[f32], z: &[f32], hit: &mut [u8]) {
         let n = hit.len();
         let (x, y, z) = (&x[..n], &y[..n], &z[..n]);
-        let (z_low, z_high) = self.z_range;
-        let table: &[f32; BINS] = self.limit_sq[..BINS].try_into().expect("BINS entries");
-        let scale = (BINS as f64 / (2.0 * PI)) as f32;
-        // Chunks of lanes that are all already terminal, or all inside the disk the scan shows
-        // free in every direction (and between floor and ceiling), need no lookup: early in a
-        // rollout that is most of them.
-        for start in (0..n).step_by(CHECK_CHUNK) {
-            let end = (start + CHECK_CHUNK).min(n);
-            let (x, y, z, hit) = (
-                &x[start..end],
-                &y[start..end],
-                &z[start..end],
-                &mut hit[start..end],
+        let full = n - n % CHECK_CHUNK;
+        for at in (0..full).step_by(CHECK_CHUNK) {
+            let lanes = at..at + CHECK_CHUNK;
+            self.mark_chunk(
+                chunk_of(x, lanes.clone()),
+                chunk_of(y, lanes.clone()),
+                chunk_of(z, lanes.clone()),
+                (&mut hit[lanes]).try_into().expect("CHECK_CHUNK lanes"),
             );
-            let mut settled = true;
-            for i in 0..hit.len() {
-                let inside =
-                    x[i] * x[i] + y[i] * y[i] < self.inner_sq && z[i] >= z_low && z[i] <= z_high;
-                settled &= inside | (hit[i] != 0);
-            }
-            if settled {
-                continue;
-            }
-            // Branch-free over lanes with an i32 bin index, so the loop compiles to SIMD gathers.
-            for i in 0..hit.len() {
-                let (px, py, pz) = (x[i], y[i], z[i]);
-                let d2 = px * px + py * py;
-                let bin = (((fast_atan2(py, px) + std::f32::consts::PI) * scale) as i32)
-                    .clamp(0, BINS as i32 - 1);
-                // A point at the sensor itself is where the robot already is: never a collision.
-                let blocked = (d2 >= table[bin as usize]) & (d2 > 1e-12);
-                let outside = (pz < z_low) | (pz > z_high);
-                hit[i] |= (blocked | outside) as u8;
-            }
+        }
+        if full < n {
+            // The last lanes, padded to a whole chunk so that the checks compile to the same
+            // SIMD code without a scalar remainder loop: padding lanes sit at the sensor and
+            // count as already terminal, and their results are dropped.
+            let width = n - full;
+            let pad = |values: &[f32]| {
+                let mut padded = [0f32; CHECK_CHUNK];
+                padded[..width].copy_from_slice(&values[full..]);
+                padded
+            };
+            let mut chunk = [1u8; CHECK_CHUNK];
+            chunk[..width].copy_from_slice(&hit[full..]);
+            self.mark_chunk(&pad(x), &pad(y), &pad(z), &mut chunk);
+            hit[full..].copy_from_slice(&chunk[..width]);
+        }
+    }
+
+    /// [`Occupancy::mark_collisions`] for one chunk of [`CHECK_CHUNK`] lanes.
+    #[inline(always)]
+    fn mark_chunk(
+        &self,
+        x: &[f32; CHECK_CHUNK],
+        y: &[f32; CHECK_CHUNK],
+        z: &[f32; CHECK_CHUNK],
+        hit: &mut [u8; CHECK_CHUNK],
+    ) {
+        let (z_low, z_high) = self.z_range;
+        // A chunk of lanes that are all already terminal, or all inside the disk the scan
+        // shows free in every direction (and between floor and ceiling), needs no lookup:
+        // early in a rollout that is most of them.
+        let mut settled = true;
+        for i in 0..CHECK_CHUNK {
+            let inside =
+                x[i] * x[i] + y[i] * y[i] < self.inner_sq && z[i] >= z_low && z[i] <= z_high;
+            settled &= inside | (hit[i] != 0);
+        }
+        if settled {
+            return;
+        }
+        let table: &[f32; BINS] = self.limit_sq[..BINS].try_into().expect("BINS entries");
+        // Branch-free over lanes with an i32 bin index, so the loop compiles to SIMD gathers.
+        for i in 0..CHECK_CHUNK {
+            let (px, py, pz) = (x[i], y[i], z[i]);
+            let d2 = px * px + py * py;
+            let bin = bearing_bin(fast_atan2(py, px));
+            // A point at the sensor itself is where the robot already is: never a collision.
+            let blocked = (d2 >= table[bin]) & (d2 > 1e-12);
+            let outside = (pz < z_low) | (pz > z_high);
+            hit[i] |= (blocked | outside) as u8;
         }
     }
 }
 
 /// Lanes checked together by [`Occupancy::mark_collisions`]: one AVX-512 register of `f32`.
 const CHECK_CHUNK: usize = 16;
+
+/// Lanes `lanes` (exactly [`CHECK_CHUNK`] of them) of `values`, as an array reference.
+fn chunk_of(values: &[f32], lanes: std::ops::Range<usize>) -> &[f32; CHECK_CHUNK] {
+    values[lanes].try_into().expect("CHECK_CHUNK lanes")
+}
+
+/// The table bin of a bearing in `[−π, π]` (clamped to the table; NaN → bin 0), written so
+/// that a loop over lanes stays SIMD.
+///
+/// A float-to-integer `as` cast saturates and maps NaN to zero, which LLVM lowers to scalar code
+/// lane by lane (it made the collision checks three times slower). Here the bin is floored and
+/// clamped as a float (`max` also turns NaN into 0), and adding 2²³ puts that whole number
+/// into the low mantissa bits, read off with one integer subtraction.
+#[inline(always)]
+fn bearing_bin(bearing: f32) -> usize {
+    const TWO_POW_23: f32 = 8_388_608.0;
+    let scale = BINS_PER_RADIAN as f32;
+    let bin = ((bearing + std::f32::consts::PI) * scale)
+        .floor()
+        .max(0.0)
+        .min((BINS - 1) as f32);
+    // The clamp restates the range for the compiler, so indexing needs no bounds check.
+    ((bin + TWO_POW_23).to_bits() as i32 - TWO_POW_23.to_bits() as i32).clamp(0, BINS as i32 - 1)
+        as usize
+}
 
 /// The scan's beams in the world-aligned horizontal plane, one column per quantity (so that
 /// arithmetic over beams vectorises).

@@ -16,9 +16,12 @@ use crate::occupancy::Occupancy;
 use crate::sampling::Controls;
 use crate::state::RobotState;
 
-/// Trajectories integrated together in one cache-resident block (a 13-component quadrotor
-/// block of 256 lanes is 13 KiB); blocks run in parallel on rayon's pool.
-const BLOCK_LANES: usize = 256;
+/// Trajectories integrated together in one cache-resident block; blocks run in parallel on
+/// rayon's pool. A quadrotor lane keeps about 63 `f32` in play (state, three RK4 scratch
+/// batches, actuation, commands), so 160 lanes (40 KiB) stay within a 48 KiB L1 data cache,
+/// where 256 lanes (64 KiB) spilled to L2 (2000 quadrotor lanes on one core: 5.1 ms against
+/// 5.9 ms). A multiple of the collision checks' 16-lane chunks.
+const BLOCK_LANES: usize = 160;
 
 /// Where each trajectory ended and whether it collided on the way.
 #[derive(Debug, Clone, Default, PartialEq)]

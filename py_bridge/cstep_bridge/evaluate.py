@@ -47,6 +47,7 @@ class Agent:
     model: Path
     env: str
     steps: int
+    seed: int | None = None
 
 
 def find_agent(path: Path, label: str | None) -> Agent:
@@ -65,7 +66,17 @@ def find_agent(path: Path, label: str | None) -> Agent:
     if label is None:
         agent = settings.get("agent", model.stem)
         label = f"empowered c={settings['c']:g}" if agent == "empowered" else agent
-    return Agent(label, model, settings.get("env", ""), int(data.get("num_timesteps", 0)))
+    steps = int(data.get("num_timesteps", 0))
+    return Agent(label, model, settings.get("env", ""), steps, settings.get("seed"))
+
+
+def distinct_labels(agents: list[Agent]) -> None:
+    """Names agents that would share a label after their training seed, e.g. "c=1 (seed 2)"."""
+    for agent in agents:
+        twins = [a for a in agents if a.label == agent.label]
+        if len(twins) > 1 and len({a.seed for a in twins}) == len(twins):
+            for a in twins:
+                a.label = f"{a.label} (seed {a.seed})"
 
 
 def configurations(env: str) -> list[Any]:
@@ -298,6 +309,8 @@ def main(argv: list[str] | None = None) -> int:
     if len(envs) != 1 or "" in envs:
         raise SystemExit(f"cannot tell which env to evaluate on ({envs}): pass --env")
     env = envs.pop()
+    if not args.label:
+        distinct_labels(agents)
     if len({a.label for a in agents}) != len(agents):
         raise SystemExit("two agents share a label: pass --label for each --model")
     n = len(configurations(env))

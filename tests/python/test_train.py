@@ -9,6 +9,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from cstep_bridge.evaluate import Agent, distinct_labels
 from stable_baselines3 import PPO
 
 REPO = Path(__file__).resolve().parents[2]
@@ -114,6 +115,20 @@ def test_empowered_training_with_two_envs_each_with_its_own_node(tmp_path):
     assert np.isfinite(empowerment)
     assert PPO.load(out / "model.zip", device="cpu").num_timesteps == 128
     assert json.loads((out / "run.json").read_text())["c"] == 0.5
+
+
+def test_agents_with_the_same_settings_are_told_apart_by_their_seed():
+    agents = [
+        Agent("empowered c=1", Path("a.zip"), "drone", 10, seed=1),
+        Agent("empowered c=1", Path("b.zip"), "drone", 10, seed=2),
+        Agent("unempowered", Path("c.zip"), "drone", 10, seed=1),
+    ]
+    distinct_labels(agents)
+    assert [a.label for a in agents] == [
+        "empowered c=1 (seed 1)",
+        "empowered c=1 (seed 2)",
+        "unempowered",
+    ]
 
 
 def test_evaluation_cli_writes_the_tables_and_plots(drone_run, tmp_path):

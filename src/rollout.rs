@@ -132,9 +132,8 @@ impl Rk4 {
     /// `x ← x + dt/6 · (k1 + 2 k2 + 2 k3 + k4)` with the actuation held over the step; each
     /// slope is folded into the running sum in the same pass that builds the next stage.
     fn step(&mut self, model: &dyn Dynamics, state: &mut Batch, actuation: &Batch, dt: f32) {
-        self.sum.as_mut_slice().fill(0.0);
         model.derivative(state, actuation, &mut self.slope);
-        for (weight, advance) in [(1.0, 0.5 * dt), (2.0, 0.5 * dt), (2.0, dt)] {
+        for (first, advance) in [(true, 0.5 * dt), (false, 0.5 * dt), (false, dt)] {
             for ((stage, sum), (&x, &k)) in self
                 .stage
                 .as_mut_slice()
@@ -142,7 +141,8 @@ impl Rk4 {
                 .zip(self.sum.as_mut_slice())
                 .zip(state.as_slice().iter().zip(self.slope.as_slice()))
             {
-                *sum += weight * k;
+                // The first slope starts the sum (weight 1) instead of a separate zeroing pass.
+                *sum = if first { k } else { *sum + 2.0 * k };
                 *stage = x + advance * k;
             }
             model.derivative(&self.stage, actuation, &mut self.slope);

@@ -5,7 +5,9 @@ one CPU. Each run steps the env ``--steps`` times with the same seeded random ac
 configuration (resetting, untimed, when an episode ends); the empowered step adds the odometry and
 scan messages, the `/cstep/evaluate` round trip over DDS (localhost, a private domain) and the
 node's C-STEP evaluation. Prints the median over ``--runs`` runs of the mean step time and the
-overhead of the empowered reward.
+overhead of the empowered reward, and, to show where that overhead goes, the empowered step once
+more with the bridge's three simulation-topic publishes (/odom, /scan, /clock: for observers
+only in service mode) turned off.
 """
 
 import argparse
@@ -46,21 +48,24 @@ def main() -> int:
     os.sched_setaffinity(0, {args.cpu})
     os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"
     print(f"one core (CPU {args.cpu}); {args.runs} runs of {args.steps} steps; medians")
-    print(f"{'env':6} {'reward':12} {'ms/step':>8} {'steps/s':>8} {'overhead':>9}")
+    print(f"{'env':6} {'reward':15} {'ms/step':>8} {'steps/s':>8} {'overhead':>9}")
     for name in args.env or ENV_NAMES:
         plain_ms = None
-        for empowered in (False, True):
-            env = make_env(name, empowered=empowered)
+        for label in ("unempowered", "empowered", "  no sim topics"):
+            env = make_env(name, empowered=label != "unempowered")
             try:
                 step_time_ms(env, 30, seed=99)  # warm-up: node start, discovery, caches
+                if label == "  no sim topics":
+                    bridge = env.unwrapped.bridge
+                    for publisher in (bridge.odom_pub, bridge.scan_pub, bridge.clock_pub):
+                        publisher.publish = lambda msg: None
                 ms = statistics.median(
                     step_time_ms(env, args.steps, seed=r) for r in range(args.runs)
                 )
             finally:
                 env.close()
-            label = "empowered" if empowered else "unempowered"
             overhead = "" if plain_ms is None else f"{100 * (ms / plain_ms - 1):+8.1f}%"
-            print(f"{name:6} {label:12} {ms:8.2f} {1e3 / ms:8.0f} {overhead:>9}", flush=True)
+            print(f"{name:6} {label:15} {ms:8.2f} {1e3 / ms:8.0f} {overhead:>9}", flush=True)
             plain_ms = plain_ms or ms
     return 0
 

@@ -96,6 +96,15 @@ class EmpoweredRewardEnv(gym.Env):
             self._own_bridge = RosBridge(**self._bridge_args)
         return self._bridge or self._own_bridge
 
+    def _outcome(self, state: DroneState, collision: bool) -> tuple[np.ndarray, float, dict]:
+        """After a step: the scan, the reward and the ``info`` of ``state`` (success updated)."""
+        ranges = self.sim.scan(state)
+        info = self._info(state, collision)
+        self.success = self.success or info["distance_to_goal"] < self.success_radius
+        info["success"] = self.success
+        reward = self._reward(state, ranges, self.sim.time, info["distance_to_goal"], info)
+        return ranges, reward, info
+
     def _reward(
         self, state: DroneState, ranges: np.ndarray, t: float, distance: float, info: dict
     ) -> float:
@@ -208,12 +217,8 @@ class CStepDroneEnv(EmpoweredRewardEnv):
         )
         state = self.sim.step(waypoint)
         self.steps += 1
-        ranges = self.sim.scan(state)
-        collision = self.sim.in_collision()
-        distance = self._distance(state)
-        self.success = self.success or distance < self.success_radius
-        info = self._info(state, collision)
-        reward = self._reward(state, ranges, self.sim.time, distance, info)
+        ranges, reward, info = self._outcome(state, self.sim.in_collision())
+        collision = info["collision"]
         terminated = collision or state.tilt > MAX_TILT
         truncated = not terminated and self.steps >= self.max_steps
         return self._observe(state, ranges), float(reward), terminated, truncated, info

@@ -106,6 +106,9 @@ def fly(model_path: Path, env_name: str, indices: list[int]) -> list[metrics.Epi
     env = make_env(env_name, empowered=False)
     radius = env.unwrapped.robot_radius
     dt = env.unwrapped.control_period
+    route_taken = None
+    if env_name == "maze":
+        from .maze import route_taken
     episodes = []
     try:
         for i in indices:
@@ -125,9 +128,7 @@ def fly(model_path: Path, env_name: str, indices: list[int]) -> list[metrics.Epi
                 collision=bool(info["collision"]),
                 config=i,
             )
-            if env_name == "maze":
-                from .maze import route_taken
-
+            if route_taken is not None:
                 episode.extra["route"] = route_taken(episode.xy)
             episodes.append(episode)
     finally:
@@ -158,10 +159,13 @@ def _fmt(v: float | None, spec: str, suffix: str = "") -> str:
 
 
 def markdown(
-    env: str, agents: list[Agent], results: dict[str, list[metrics.Episode]], command: str
+    env: str,
+    agents: list[Agent],
+    results: dict[str, list[metrics.Episode]],
+    summaries: dict[str, metrics.Summary],
+    command: str,
 ) -> str:
-    """results.md: the paper's tables for these agents."""
-    summaries = {a.label: metrics.summarize(results[a.label], clear_x(env)) for a in agents}
+    """results.md: the paper's tables for these agents (``summaries`` of ``results``, by label)."""
     n = len(next(iter(results.values())))
     th = metrics.THRESHOLDS
     head = "| Distance threshold (m) | " + " | ".join(f"{d:g}" for d in th) + " |"
@@ -315,11 +319,11 @@ def main(argv: list[str] | None = None) -> int:
         raise SystemExit("two agents share a label: pass --label for each --model")
     n = len(configurations(env))
     indices = list(range(min(n, args.episodes or n)))
-    results = {}
+    results, summaries = {}, {}
     for agent in agents:
         print(f"{agent.label}: {len(indices)} episodes on {env} ({agent.model})", flush=True)
         results[agent.label] = evaluate_agent(agent, env, indices, args.jobs)
-        s = metrics.summarize(results[agent.label], clear_x(env))
+        s = summaries[agent.label] = metrics.summarize(results[agent.label], clear_x(env))
         print(
             f"  success {s.success_rate:.0%}, collisions {s.collision_rate:.0%}, "
             f"clear time {_fmt(s.clear_time, '.2f', ' s')}",
@@ -330,8 +334,7 @@ def main(argv: list[str] | None = None) -> int:
     command = "python -m cstep_bridge.evaluate " + shlex.join(
         argv if argv is not None else sys.argv[1:]
     )
-    (out / "results.md").write_text(markdown(env, agents, results, command))
-    summaries = {a.label: asdict(metrics.summarize(results[a.label], clear_x(env))) for a in agents}
+    (out / "results.md").write_text(markdown(env, agents, results, summaries, command))
     episodes = {
         label: [
             {
@@ -349,7 +352,13 @@ def main(argv: list[str] | None = None) -> int:
     }
     (out / "results.json").write_text(
         json.dumps(
-            {"env": env, "command": command, "summaries": summaries, "episodes": episodes}, indent=1
+            {
+                "env": env,
+                "command": command,
+                "summaries": {k: asdict(v) for k, v in summaries.items()},
+                "episodes": episodes,
+            },
+            indent=1,
         )
     )
     paths_figure(panels(env, agents, results), [a.label for a in agents], out / "paths.png")

@@ -358,11 +358,7 @@ class CStepMazeEnv(EmpoweredRewardEnv):
         action = np.clip(np.asarray(action, dtype=float), -1.0, 1.0)
         state, collision = self.sim.step(action * BALL_MASS * MAX_ACCELERATION)
         self.steps += 1
-        ranges = self.sim.scan(state)
-        distance = self._distance(state)
-        self.success = self.success or distance < self.success_radius
-        info = self._info(state, collision)
-        reward = self._reward(state, ranges, self.sim.time, distance, info)
+        ranges, reward, info = self._outcome(state, collision)
         truncated = not collision and self.steps >= self.max_steps
         return self._observe(state, ranges), float(reward), collision, truncated, info
 

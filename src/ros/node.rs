@@ -6,9 +6,12 @@
 //! counted as skipped. The `/cstep/evaluate` service scores a given state synchronously with the
 //! configured seed, so identical requests get identical answers. Diagnostics report input ages,
 //! counts of skipped, stale and rejected inputs, and the last score, once a second.
-//! `/cstep/markers` (the sampled endpoints and their hull, [`super::markers`]) is built and
-//! published after each score only while a subscriber is matched; nobody listening costs the
-//! scoring path one atomic load.
+//! Scans are scored only while someone subscribes to the scores (`/cstep/empowerment` or
+//! `/cstep/reward`), as lazy ROS publishers do: a simulation that takes its rewards from the
+//! service and publishes `/scan` for observers would otherwise pay for every evaluation twice.
+//! Likewise `/cstep/markers` (the sampled endpoints and their hull, [`super::markers`]) is built
+//! and published with a score only while a subscriber is matched. Both are decided per scan, as
+//! it arrives, from the matches the DDS side has recorded.
 
 use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -56,7 +59,6 @@ pub fn run(config: &[PathBuf], ros_args: &RosArgs, stop: Arc<AtomicBool>) -> Res
         mailbox: Mutex::new(None),
         arrived: Condvar::new(),
         stopping: stop,
-        markers_wanted: AtomicBool::new(false),
     });
 
     let context = context_from_env()?;
@@ -111,11 +113,16 @@ struct Shared {
     timeout: Duration,
     latest: Mutex<Latest>,
     /// The newest scan not yet scored.
-    mailbox: Mutex<Option<(LaserScan, Instant)>>,
+    mailbox: Mutex<Option<PostedScan>>,
     arrived: Condvar,
     stopping: Arc<AtomicBool>,
-    /// Whether `/cstep/markers` has a matched subscriber (polled on the DDS side).
-    markers_wanted: AtomicBool,
+}
+
+/// A scan waiting to be scored.
+struct PostedScan {
+    scan: LaserScan,
+    /// Whether `/cstep/markers` had a matched subscriber when the scan arrived.
+    with_markers: bool,
 }
 
 /// Newest inputs and running counts, for scoring and diagnostics.
@@ -127,6 +134,8 @@ struct Latest {
     last_score: Option<(f64, bool, Duration)>,
     scored: u64,
     skipped: u64,
+    /// Scans that arrived while nobody subscribed to the scores, so were not scored.
+    unwatched: u64,
     stale: u64,
     rejected: u64,
     markers_published: u64,
@@ -278,7 +287,7 @@ fn parameter_options(shared: &Arc<Shared>, settings: &crate::config::Settings) -
 }
 
 /// The DDS-side tasks: keep the newest odometry and goal, post scans, answer the service,
-/// publish diagnostics, watch for marker subscribers; returns when Ctrl-C was pressed.
+/// publish diagnostics; returns when Ctrl-C was pressed.
 async fn serve(shared: &Arc<Shared>, ports: &Ports, node: &Node) {
     let odometry = ports.odom.async_stream().for_each(|received| async move {
         if let Ok((odom, _)) = received {
@@ -295,10 +304,17 @@ async fn serve(shared: &Arc<Shared>, ports: &Ports, node: &Node) {
     });
     let scans = ports.scan.async_stream().for_each(|received| async move {
         if let Ok((scan, _)) = received {
-            let now = Instant::now();
-            shared.latest().last_scan = Some(now);
+            shared.latest().last_scan = Some(Instant::now());
+            // Matched readers of our writers, as the spinner records DDS matching.
+            let scores_wanted = ports.empowerment.get_subscription_count(node) > 0
+                || ports.reward.get_subscription_count(node) > 0;
+            if !scores_wanted {
+                shared.latest().unwatched += 1;
+                return;
+            }
+            let with_markers = ports.markers.get_subscription_count(node) > 0;
             let mut mailbox = shared.mailbox.lock().unwrap_or_else(|e| e.into_inner());
-            if mailbox.replace((scan, now)).is_some() {
+            if mailbox.replace(PostedScan { scan, with_markers }).is_some() {
                 shared.latest().skipped += 1;
             }
             shared.arrived.notify_one();
@@ -322,14 +338,6 @@ async fn serve(shared: &Arc<Shared>, ports: &Ports, node: &Node) {
             let _ = ports.diagnostics.publish(shared.diagnostics());
         }
     };
-    let marker_subscribers = async {
-        loop {
-            // Matched readers of the markers writer, as the spinner records DDS matching.
-            let wanted = ports.markers.get_subscription_count(node) > 0;
-            shared.markers_wanted.store(wanted, Ordering::Relaxed);
-            smol::Timer::after(MARKER_SUBSCRIBER_POLL).await;
-        }
-    };
     let stopped = async {
         while !shared.stopping.load(Ordering::SeqCst) {
             smol::Timer::after(Duration::from_millis(50)).await;
@@ -341,14 +349,10 @@ async fn serve(shared: &Arc<Shared>, ports: &Ports, node: &Node) {
         Box::pin(scans),
         Box::pin(service),
         Box::pin(diagnostics),
-        Box::pin(marker_subscribers),
         Box::pin(stopped),
     ])
     .await;
 }
-
-/// How often the node checks whether `/cstep/markers` has subscribers.
-const MARKER_SUBSCRIBER_POLL: Duration = Duration::from_millis(100);
 
 /// What the scoring thread publishes to.
 struct Outputs {
@@ -361,7 +365,7 @@ struct Outputs {
 /// score, then the markers if someone subscribes to them.
 fn score_scans(shared: &Shared, outputs: &Outputs) {
     loop {
-        let (scan, _) = {
+        let PostedScan { scan, with_markers } = {
             let mut mailbox = shared.mailbox.lock().unwrap_or_else(|e| e.into_inner());
             loop {
                 if shared.stopping.load(Ordering::SeqCst) {
@@ -403,7 +407,6 @@ fn score_scans(shared: &Shared, outputs: &Outputs) {
             continue;
         }
         let goal = shared.latest().goal;
-        let with_markers = shared.markers_wanted.load(Ordering::Relaxed);
         match shared.score(&odom, &scan, goal, with_markers) {
             Ok((e, r, markers)) => {
                 // A full queue or a lost subscriber is not the node's failure; diagnostics show it.
@@ -555,6 +558,7 @@ impl Shared {
             ),
             ("scans_scored", latest.scored.to_string()),
             ("scans_skipped", latest.skipped.to_string()),
+            ("scans_unwatched", latest.unwatched.to_string()),
             ("scans_stale", latest.stale.to_string()),
             ("inputs_rejected", latest.rejected.to_string()),
             ("markers_published", latest.markers_published.to_string()),

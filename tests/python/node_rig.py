@@ -128,12 +128,15 @@ class Rig:
         self.empowerment: list[Empowerment] = []
         self.reward: list[EmpoweredReward] = []
         self.diagnostics: list[DiagnosticArray] = []
-        self.node.create_subscription(
-            Empowerment, "/cstep/empowerment", self.empowerment.append, RELIABLE
-        )
-        self.node.create_subscription(
-            EmpoweredReward, "/cstep/reward", self.reward.append, RELIABLE
-        )
+        # The node scores scans only while someone subscribes to a score topic.
+        self.score_subscriptions = [
+            self.node.create_subscription(
+                Empowerment, "/cstep/empowerment", self.empowerment.append, RELIABLE
+            ),
+            self.node.create_subscription(
+                EmpoweredReward, "/cstep/reward", self.reward.append, RELIABLE
+            ),
+        ]
         self.node.create_subscription(
             DiagnosticArray, "/diagnostics", self.diagnostics.append, RELIABLE
         )

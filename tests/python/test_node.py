@@ -4,9 +4,10 @@ import math
 
 import pytest
 from conftest import wait_until
+from cstep_msgs.msg import EmpoweredReward
 from cstep_msgs.srv import Evaluate
 from diagnostic_msgs.msg import DiagnosticStatus
-from node_rig import corridor_scan, cstep_eval, message_to_ordereddict, odometry
+from node_rig import RELIABLE, corridor_scan, cstep_eval, message_to_ordereddict, odometry
 from rcl_interfaces.msg import Parameter, ParameterType, ParameterValue
 from rcl_interfaces.srv import SetParameters
 
@@ -32,6 +33,23 @@ def test_every_scan_gets_both_outputs_with_its_stamp_and_cstep_eval_agrees(rig, 
     assert offline["num_colliding"] == live.num_colliding
     live_reward = next(m for m in rig.reward if m.header.stamp.sec == 1000)
     assert offline["reward"] == pytest.approx(live_reward.reward, abs=1e-12)
+
+
+def test_scans_are_scored_only_while_someone_subscribes_to_the_scores(rig):
+    for subscription in rig.score_subscriptions:
+        rig.node.destroy_subscription(subscription)
+    rig.spin_for(1.0)  # the node sees its score readers leave
+    before = rig.next_diagnostics()
+    rig.feed(10, first_sec=5000)
+    after = rig.next_diagnostics(2)
+    assert after["scans_scored"] == before["scans_scored"], "scored with nobody listening"
+    assert int(after["scans_unwatched"]) >= int(before["scans_unwatched"]) + 9
+
+    # One score subscriber is enough to bring scoring back.
+    rewards = []
+    rig.node.create_subscription(EmpoweredReward, "/cstep/reward", rewards.append, RELIABLE)
+    rig.feed_until(lambda: len(rewards) >= 3, "rewards once subscribed", first_sec=5100)
+    assert all(5100 <= r.header.stamp.sec < 5200 for r in rewards)
 
 
 def test_evaluate_service_answers_identically_and_rejects_a_zero_quaternion(rig):

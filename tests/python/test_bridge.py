@@ -2,6 +2,8 @@
 the empowered reward from a live `cstep node` over real rclpy (a private domain per test)."""
 
 import math
+import os
+import signal
 
 import numpy as np
 import pybullet as p
@@ -144,3 +146,26 @@ def test_empowered_env_gets_finite_rewards_matching_cstep_eval_and_the_topic_pat
 def test_a_missing_node_is_a_clear_error_not_a_zero_reward(ros_domain):
     with pytest.raises(RewardTimeout, match="no /cstep/evaluate service"):
         RosBridge(domain_id=ros_domain, start_node=False, discovery_timeout=1.0)
+
+
+def test_a_reply_that_does_not_come_times_out_and_a_late_one_is_not_taken_for_the_next(
+    ros_domain,
+):
+    bridge = RosBridge(domain_id=ros_domain, timeout=1.0)
+    sim = DroneSim(arena(-0.9))
+    try:
+        state, ranges = sim.state(), sim.scan()
+        first = bridge.evaluate(state, ranges, 1.0)
+        os.kill(bridge.cstep.proc.pid, signal.SIGSTOP)  # the node hangs
+        try:
+            with pytest.raises(RewardTimeout, match="no /cstep/evaluate reply .* within 1.0 s"):
+                bridge.evaluate(state, ranges * 0.5, 2.0)
+        finally:
+            os.kill(bridge.cstep.proc.pid, signal.SIGCONT)
+        # The hung request's reply arrives late; the next call must get its own answer.
+        again = bridge.evaluate(state, ranges, 3.0)
+        assert again.reward == first.reward
+        assert again.reward_msg.header.stamp.sec == 3
+    finally:
+        sim.close()
+        bridge.close()

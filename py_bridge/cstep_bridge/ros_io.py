@@ -123,7 +123,8 @@ def scan_msg(ranges: np.ndarray, t: float) -> LaserScan:
 
 
 class CStepNode:
-    """A private `cstep node` process on ``domain_id``, localhost only; killed by PID on close."""
+    """A private `cstep node` process on ``domain_id``, localhost only; stopped by PID on close,
+    and by the kernel when this process ends without closing it."""
 
     def __init__(
         self,
@@ -140,7 +141,8 @@ class CStepNode:
                 "or set CSTEP_BIN"
             )
         params = {"safety_coefficient": repr(float(safety_coefficient)), **(extra_params or {})}
-        args = [str(binary), "node", "--config", str(config), "--ros-args"]
+        # --exit-with-parent: a crashed or killed trainer leaves no node behind.
+        args = [str(binary), "node", "--exit-with-parent", "--config", str(config), "--ros-args"]
         for k, v in params.items():
             args += ["-p", f"{k}:={v}"]
         env = dict(os.environ)

@@ -12,6 +12,11 @@ pub struct NodeArgs {
     /// Parameters file (ros__parameters YAML); the built-in defaults apply without one.
     #[arg(long)]
     config: Option<PathBuf>,
+    /// Stop when the process that started this one ends, however it ends (a crash or a kill
+    /// included): for programs that start a private node, such as the Python bridge, so that
+    /// none is left behind. Linux only.
+    #[arg(long)]
+    exit_with_parent: bool,
     /// ROS arguments: `--ros-args [--params-file F] [-p name:=value] [-r from:=to] [--]`.
     #[arg(
         trailing_var_arg = true,
@@ -31,7 +36,35 @@ pub fn run(args: NodeArgs) -> Result<(), String> {
         }
     }
     let ros_args = RosArgs::parse(&args.ros_args)?;
-    cstep::ros::node::run(args.config.as_slice(), &ros_args, stop_on_ctrl_c()?)
+    let stop = stop_on_ctrl_c()?;
+    if args.exit_with_parent {
+        exit_with_parent()?;
+    }
+    cstep::ros::node::run(args.config.as_slice(), &ros_args, stop)
+}
+
+/// Has the kernel send SIGTERM, which stops the node cleanly, when the parent process ends.
+#[cfg(target_os = "linux")]
+fn exit_with_parent() -> Result<(), String> {
+    // SAFETY: getppid and prctl(PR_SET_PDEATHSIG, signal) take plain integers and touch no memory.
+    let parent = unsafe { libc::getppid() };
+    if unsafe { libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGTERM) } != 0 {
+        return Err(format!(
+            "--exit-with-parent: prctl failed: {}",
+            std::io::Error::last_os_error()
+        ));
+    }
+    // A parent that ended before the request took effect sends nothing: it has been replaced.
+    if unsafe { libc::getppid() } != parent {
+        return Err("--exit-with-parent: the parent process has already ended".into());
+    }
+    Ok(())
+}
+
+/// Without the parent-death signal there is no reliable way to follow the parent.
+#[cfg(not(target_os = "linux"))]
+fn exit_with_parent() -> Result<(), String> {
+    Err("--exit-with-parent is supported on Linux only".into())
 }
 
 /// A flag that Ctrl-C (SIGINT) or SIGTERM sets, so the node can leave the DDS domain cleanly.

@@ -4,10 +4,15 @@ the empowered reward from a live `cstep node` over real rclpy (a private domain 
 import math
 import os
 import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
 
 import numpy as np
 import pybullet as p
 import pytest
+from conftest import REPO
 from cstep_bridge.env import CStepDroneEnv
 from cstep_bridge.ros_io import RewardTimeout, RosBridge, odometry_msg, scan_msg
 from cstep_bridge.sim import LIDAR_BEAMS, Arena, DroneSim
@@ -169,3 +174,31 @@ def test_a_reply_that_does_not_come_times_out_and_a_late_one_is_not_taken_for_th
     finally:
         sim.close()
         bridge.close()
+
+
+def process_gone(pid: int) -> bool:
+    """Whether ``pid`` has exited (gone, or a zombie nobody has reaped yet)."""
+    try:
+        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] == "Z"
+    except FileNotFoundError:
+        return True
+
+
+def test_a_killed_trainer_leaves_no_node_behind(ros_domain):
+    trainer = (
+        "import os, signal, sys\n"
+        f"sys.path.insert(0, {str(REPO / 'py_bridge')!r})\n"
+        "from cstep_bridge.ros_io import RosBridge\n"
+        f"bridge = RosBridge(domain_id={ros_domain})\n"
+        "print(bridge.cstep.proc.pid, flush=True)\n"
+        "os.kill(os.getpid(), signal.SIGKILL)  # no close, no atexit\n"
+    )
+    run = subprocess.run(
+        [sys.executable, "-c", trainer], check=False, capture_output=True, text=True, timeout=60
+    )
+    assert run.returncode == -signal.SIGKILL, run.stderr
+    node = int(run.stdout.split()[0])
+    deadline = time.monotonic() + 10
+    while not process_gone(node):
+        assert time.monotonic() < deadline, f"the trainer's cstep node {node} outlived it"
+        time.sleep(0.05)

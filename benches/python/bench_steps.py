@@ -5,9 +5,10 @@ one CPU. Each run steps the env ``--steps`` times with the same seeded random ac
 configuration (resetting, untimed, when an episode ends); the empowered step adds the odometry and
 scan messages, the `/cstep/evaluate` round trip over DDS (localhost, a private domain) and the
 node's C-STEP evaluation. Prints the median over ``--runs`` runs of the mean step time and the
-overhead of the empowered reward, and, to show where that overhead goes, the empowered step once
+overhead of the empowered reward and, to show where that overhead goes, the empowered step once
 more with the bridge's three simulation-topic publishes (/odom, /scan, /clock: for observers
-only in service mode) turned off.
+only in service mode) turned off, and the reward call alone (``RosBridge.evaluate`` on the
+state the env is in: messages, publishes, the round trip and the node's evaluation).
 """
 
 import argparse
@@ -38,6 +39,17 @@ def step_time_ms(env, steps: int, seed: int) -> float:
     return 1e3 * spent / steps
 
 
+def reward_call_ms(env, calls: int) -> float:
+    """Mean wall time (ms) of the bridge's reward call for the env's current state."""
+    sim = env.unwrapped.sim
+    state, ranges = sim.state(), sim.scan()
+    bridge = env.unwrapped.bridge
+    t0 = time.perf_counter()
+    for k in range(calls):
+        bridge.evaluate(state, ranges, 1000.0 + k / 30)
+    return 1e3 * (time.perf_counter() - t0) / calls
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--env", choices=ENV_NAMES, action="append", help="default: all")
@@ -62,10 +74,16 @@ def main() -> int:
                 ms = statistics.median(
                     step_time_ms(env, args.steps, seed=r) for r in range(args.runs)
                 )
+                if label == "empowered":
+                    call_ms = statistics.median(
+                        reward_call_ms(env, args.steps) for _ in range(args.runs)
+                    )
             finally:
                 env.close()
             overhead = "" if plain_ms is None else f"{100 * (ms / plain_ms - 1):+8.1f}%"
             print(f"{name:6} {label:15} {ms:8.2f} {1e3 / ms:8.0f} {overhead:>9}", flush=True)
+            if label == "empowered":
+                print(f"{name:6} {'  reward call':15} {call_ms:8.2f}", flush=True)
             plain_ms = plain_ms or ms
     return 0
 

@@ -136,6 +136,8 @@ struct Latest {
     skipped: u64,
     /// Scans that arrived while nobody subscribed to the scores, so were not scored.
     unwatched: u64,
+    /// Whether the newest scan was one of those.
+    last_scan_unwatched: bool,
     stale: u64,
     rejected: u64,
     markers_published: u64,
@@ -304,13 +306,17 @@ async fn serve(shared: &Arc<Shared>, ports: &Ports, node: &Node) {
     });
     let scans = ports.scan.async_stream().for_each(|received| async move {
         if let Ok((scan, _)) = received {
-            shared.latest().last_scan = Some(Instant::now());
             // Matched readers of our writers, as the spinner records DDS matching.
             let scores_wanted = ports.empowerment.get_subscription_count(node) > 0
                 || ports.reward.get_subscription_count(node) > 0;
-            if !scores_wanted {
-                shared.latest().unwatched += 1;
-                return;
+            {
+                let mut latest = shared.latest();
+                latest.last_scan = Some(Instant::now());
+                latest.last_scan_unwatched = !scores_wanted;
+                if !scores_wanted {
+                    latest.unwatched += 1;
+                    return;
+                }
             }
             let with_markers = ports.markers.get_subscription_count(node) > 0;
             let mut mailbox = shared.mailbox.lock().unwrap_or_else(|e| e.into_inner());
@@ -532,6 +538,11 @@ impl Shared {
             (3, "inputs stale: no score".to_owned())
         } else if let Some(problem) = latest.last_problem.take() {
             (1, problem)
+        } else if latest.last_scan_unwatched {
+            (
+                0,
+                "no subscriber to the scores: scans not scored".to_owned(),
+            )
         } else {
             (0, "scoring".to_owned())
         };

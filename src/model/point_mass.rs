@@ -81,7 +81,7 @@ impl Dynamics for PointMass {
 
     /// Under a held acceleration a double integrator moves exactly by `v·dt + a·dt²/2`, which is
     /// also what RK4 computes (it is exact for polynomials of this degree) at a quarter of the work.
-    fn integrate_exactly(&self, state: &mut Batch, actuation: &Batch, dt: f32) -> bool {
+    fn integrate(&self, state: &mut Batch, actuation: &Batch, dt: f32) -> bool {
         let lanes = state.lanes();
         let (positions, velocities) = state.as_mut_slice().split_at_mut(VX * lanes);
         for axis in 0..3 {

@@ -85,18 +85,29 @@ fn roll_out_block(
     // The generic RK4's scratch, made only for models without their own integrator.
     let mut integrator = None;
     let mut actuation = Batch::zeros(model.actuation_components(), n);
-    let mut commands = vec![0.0f32; axes.count() * n];
+    let mut commands = if n < controls.lanes() {
+        vec![0.0f32; axes.count() * n]
+    } else {
+        Vec::new()
+    };
     let mut hit = vec![0u8; n];
     model.initial_state(start, &mut state);
 
     for k in 0..steps {
         let all = controls.at_step(k);
-        for axis in 0..axes.count() {
-            let from = axis * controls.lanes();
-            commands[axis * n..(axis + 1) * n]
-                .copy_from_slice(&all[from + lanes.start..from + lanes.end]);
-        }
-        model.actuate(&state, &commands, axes, &mut actuation);
+        // A block of every lane reads the step's commands in place; a block of some lanes
+        // gathers its share of each axis.
+        let commands = if n == controls.lanes() {
+            all
+        } else {
+            for axis in 0..axes.count() {
+                let from = axis * controls.lanes();
+                commands[axis * n..(axis + 1) * n]
+                    .copy_from_slice(&all[from + lanes.start..from + lanes.end]);
+            }
+            &commands
+        };
+        model.actuate(&state, commands, axes, &mut actuation);
         if !model.integrate(&mut state, &actuation, dt) {
             integrator
                 .get_or_insert_with(|| Rk4::new(model.state_components(), n))

@@ -347,13 +347,15 @@ impl Occupancy {
         // A chunk of lanes that are all already terminal, or all inside the disk the scan
         // shows free in every direction (and between floor and ceiling), needs no lookup:
         // early in a rollout that is most of them.
-        let mut settled = true;
+        // Non-short-circuit `&` and a count rather than `&&` and an early-out flag, so that
+        // this test is SIMD compares and one mask reduction, not a branch per lane.
+        let mut open = 0u32;
         for i in 0..CHECK_CHUNK {
             let inside =
-                x[i] * x[i] + y[i] * y[i] < self.inner_sq && z[i] >= z_low && z[i] <= z_high;
-            settled &= inside | (hit[i] != 0);
+                (x[i] * x[i] + y[i] * y[i] < self.inner_sq) & (z[i] >= z_low) & (z[i] <= z_high);
+            open += u32::from(!inside & (hit[i] == 0));
         }
-        if settled {
+        if open == 0 {
             return;
         }
         let table: &[f32; BINS] = self.limit_sq[..BINS].try_into().expect("BINS entries");

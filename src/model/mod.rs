@@ -67,10 +67,13 @@ pub trait Dynamics: Send + Sync + std::fmt::Debug {
     /// The time derivative of the state under a held actuation, written into `out`.
     fn derivative(&self, state: &Batch, actuation: &Batch, out: &mut Batch);
 
-    /// Advances `state` by `dt` under the held `actuation` in closed form, for models whose
-    /// equations allow it; returns `false` (the default) to have the rollout integrate with RK4.
-    /// A model that returns `true` must produce what RK4 would, up to rounding.
-    fn integrate_exactly(&self, _state: &mut Batch, _actuation: &Batch, _dt: f32) -> bool {
+    /// Advances `state` by `dt` under the held `actuation` with the model's own integrator —
+    /// a closed form where the equations allow it, or RK4 fused over blocks of lanes, which
+    /// saves the generic integrator's passes over the whole batch. Returns `false` (the
+    /// default) to have the rollout integrate with its generic RK4 ([`Dynamics::derivative`],
+    /// [`Dynamics::renormalize`]). A model that returns `true` must produce what RK4 would, up
+    /// to rounding.
+    fn integrate(&self, _state: &mut Batch, _actuation: &Batch, _dt: f32) -> bool {
         false
     }
 

@@ -55,19 +55,16 @@ impl Dynamics for PointMass {
     }
 
     fn actuate(&self, state: &Batch, commands: &[f32], axes: CommandAxes, actuation: &mut Batch) {
-        let lanes = state.lanes();
         let bound = self.max_acceleration as f32;
-        for axis in 0..3 {
-            let out = actuation.component_mut(axis);
-            if axis < axes.count() {
-                let command = &commands[axis * lanes..(axis + 1) * lanes];
-                for (a, &c) in out.iter_mut().zip(command) {
-                    *a = bound * c.clamp(-1.0, 1.0);
-                }
-            } else {
-                out.fill(0.0);
-            }
+        // Commands and actuation are both axis-major with `lanes` per axis, so the commanded
+        // axes are one contiguous run: one loop over all of them, then zeros for the rest.
+        let (commanded, rest) = actuation
+            .as_mut_slice()
+            .split_at_mut(axes.count() * state.lanes());
+        for (a, &c) in commanded.iter_mut().zip(commands) {
+            *a = bound * c.clamp(-1.0, 1.0);
         }
+        rest.fill(0.0);
     }
 
     fn derivative(&self, state: &Batch, actuation: &Batch, out: &mut Batch) {
@@ -81,17 +78,18 @@ impl Dynamics for PointMass {
 
     /// Under a held acceleration a double integrator moves exactly by `v·dt + a·dt²/2`, which is
     /// also what RK4 computes (it is exact for polynomials of this degree) at a quarter of the work.
-    fn integrate_exactly(&self, state: &mut Batch, actuation: &Batch, dt: f32) -> bool {
+    fn integrate(&self, state: &mut Batch, actuation: &Batch, dt: f32) -> bool {
+        // Positions, velocities and accelerations are each three axis blocks of `lanes`, in
+        // the same order: one loop over all three axes at once.
         let lanes = state.lanes();
         let (positions, velocities) = state.as_mut_slice().split_at_mut(VX * lanes);
-        for axis in 0..3 {
-            let p = &mut positions[axis * lanes..(axis + 1) * lanes];
-            let v = &mut velocities[axis * lanes..(axis + 1) * lanes];
-            let a = actuation.component(axis);
-            for i in 0..lanes {
-                p[i] += dt * (v[i] + 0.5 * dt * a[i]);
-                v[i] += dt * a[i];
-            }
+        for ((p, v), &a) in positions
+            .iter_mut()
+            .zip(velocities)
+            .zip(actuation.as_slice())
+        {
+            *p += dt * (*v + 0.5 * dt * a);
+            *v += dt * a;
         }
         true
     }

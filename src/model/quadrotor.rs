@@ -218,6 +218,184 @@ impl Quadrotor {
     }
 }
 
+/// Actuation components the equations of motion read: collective thrust, the three body
+/// torques and the rotor-speed sum ([`THRUST`] to [`ROTOR_SPEED_SUM`]).
+const WRENCH: usize = ACTUATION_COMPONENTS - THRUST;
+
+/// One [`CHUNK`]-lane block of an RK4 step: the state and held wrench (thrust, torques,
+/// rotor-speed sum) of its lanes, and the scratch — the stage state, the latest slope and the
+/// running weighted sum of slopes. Local fixed-size arrays alias nothing, so the loops over
+/// them compile to straight SIMD code.
+struct Rk4Chunk {
+    x: [[f32; CHUNK]; STATE_COMPONENTS],
+    wrench: [[f32; CHUNK]; WRENCH],
+    stage: [[f32; CHUNK]; STATE_COMPONENTS],
+    slope: [[f32; CHUNK]; STATE_COMPONENTS],
+    sum: [[f32; CHUNK]; STATE_COMPONENTS],
+}
+
+impl Default for Rk4Chunk {
+    fn default() -> Self {
+        let zeros = [[0.0; CHUNK]; STATE_COMPONENTS];
+        Self {
+            x: zeros,
+            wrench: [[0.0; CHUNK]; WRENCH],
+            stage: zeros,
+            slope: zeros,
+            sum: zeros,
+        }
+    }
+}
+
+impl Quadrotor {
+    /// The equations of motion for one block of [`CHUNK`] lanes: the state `x` (all
+    /// [`STATE_COMPONENTS`]) under the held `wrench` (thrust, torques, rotor-speed sum) gives
+    /// the time derivative `out`. See the module docs for the model.
+    #[inline(always)]
+    fn slope(
+        &self,
+        x: &[[f32; CHUNK]; STATE_COMPONENTS],
+        wrench: &[[f32; CHUNK]; WRENCH],
+        out: &mut [[f32; CHUNK]; STATE_COMPONENTS],
+    ) {
+        let Physics {
+            inv_mass,
+            gravity,
+            drag_xy,
+            drag_z_excess,
+            inertia: [jx, jy, jz],
+            inv_inertia: [ix, iy, iz],
+        } = self.physics;
+        let [_, _, _, vx, vy, vz, qw, qx, qy, qz, wx, wy, wz] = x;
+        let [thrust, tau_x, tau_y, tau_z, rotor_sum] = wrench;
+        let [dpx, dpy, dpz, dvx, dvy, dvz, dqw, dqx, dqy, dqz, dwx, dwy, dwz] = out;
+        for i in 0..CHUNK {
+            // Body z axis in the world frame (third column of the rotation matrix).
+            let (w, x, y, z) = (qw[i], qx[i], qy[i], qz[i]);
+            let (x2, y2) = (x + x, y + y);
+            let bx = x2 * z + y2 * w;
+            let by = y2 * z - x2 * w;
+            let bz = 1.0 - (x2 * x + y2 * y);
+
+            // Thrust along b₃; drag −Σω·(c_xy·v + (c_z − c_xy)·(b₃·v)·b₃).
+            let (v0, v1, v2) = (vx[i], vy[i], vz[i]);
+            let along = thrust[i] - drag_z_excess * rotor_sum[i] * (bx * v0 + by * v1 + bz * v2);
+            let damping = drag_xy * rotor_sum[i];
+            dpx[i] = v0;
+            dpy[i] = v1;
+            dpz[i] = v2;
+            dvx[i] = (along * bx - damping * v0) * inv_mass;
+            dvy[i] = (along * by - damping * v1) * inv_mass;
+            dvz[i] = (along * bz - damping * v2) * inv_mass - gravity;
+
+            // q̇ = ½ q ⊗ (0, ω).
+            let (p, q, r) = (wx[i], wy[i], wz[i]);
+            dqw[i] = -0.5 * (x * p + y * q + z * r);
+            dqx[i] = 0.5 * (w * p + y * r - z * q);
+            dqy[i] = 0.5 * (w * q + z * p - x * r);
+            dqz[i] = 0.5 * (w * r + x * q - y * p);
+
+            // Euler's equations with the diagonal inertia.
+            dwx[i] = (tau_x[i] - (jz - jy) * q * r) * ix;
+            dwy[i] = (tau_y[i] - (jx - jz) * r * p) * iy;
+            dwz[i] = (tau_z[i] - (jy - jx) * p * q) * iz;
+        }
+    }
+
+    /// One RK4 step of length `dt` for one block of lanes, in place, then the quaternion
+    /// renormalised: `x ← x + dt/6 · (k1 + 2 k2 + 2 k3 + k4)`, each slope folded into the sum
+    /// as the next stage is built — the rollout's generic RK4 and [`Dynamics::renormalize`],
+    /// operation for operation, so the result is bit-identical.
+    #[inline(always)]
+    fn rk4_chunk(&self, chunk: &mut Rk4Chunk, dt: f32) {
+        let Rk4Chunk {
+            x,
+            wrench,
+            stage,
+            slope,
+            sum,
+        } = chunk;
+        let half = 0.5 * dt;
+        // The per-component loops run over the flattened blocks: one contiguous loop that
+        // vectorises along memory (nested loops over components and lanes got vectorised
+        // across components, with gathers).
+        self.slope(x, wrench, slope);
+        for ((sum, stage), (&x, &k)) in sum
+            .as_flattened_mut()
+            .iter_mut()
+            .zip(stage.as_flattened_mut())
+            .zip(x.as_flattened().iter().zip(slope.as_flattened()))
+        {
+            *sum = k;
+            *stage = x + half * k;
+        }
+        for advance in [half, dt] {
+            self.slope(stage, wrench, slope);
+            for ((sum, stage), (&x, &k)) in sum
+                .as_flattened_mut()
+                .iter_mut()
+                .zip(stage.as_flattened_mut())
+                .zip(x.as_flattened().iter().zip(slope.as_flattened()))
+            {
+                *sum += 2.0 * k;
+                *stage = x + advance * k;
+            }
+        }
+        self.slope(stage, wrench, slope);
+        for (x, (&sum, &k)) in x
+            .as_flattened_mut()
+            .iter_mut()
+            .zip(sum.as_flattened().iter().zip(slope.as_flattened()))
+        {
+            *x += dt / 6.0 * (sum + k);
+        }
+        let [_, _, _, _, _, _, qw, qx, qy, qz, _, _, _] = x;
+        for i in 0..CHUNK {
+            [qw[i], qx[i], qy[i], qz[i]] = normalized([qw[i], qx[i], qy[i], qz[i]]);
+        }
+    }
+}
+
+impl Quadrotor {
+    /// [`Quadrotor::rk4_chunk`] for the `width` (at most [`CHUNK`]) lanes from `start` of the
+    /// component-major `state` and `wrench` (the actuation from [`THRUST`] on), copied into the
+    /// scratch chunk and back.
+    /// With fewer lanes than a chunk, the chunk's other lanes hold what an earlier call left
+    /// there (or zeros) and are integrated along and dropped: lanes are independent, so the
+    /// lanes kept see the same arithmetic.
+    #[inline(always)]
+    fn rk4_lanes(
+        &self,
+        state: &mut [f32],
+        wrench: &[f32],
+        start: usize,
+        width: usize,
+        dt: f32,
+        scratch: &mut Rk4Chunk,
+    ) {
+        let n = state.len() / STATE_COMPONENTS;
+        for (c, x) in scratch.x.iter_mut().enumerate() {
+            x[..width].copy_from_slice(&state[c * n + start..][..width]);
+        }
+        for (c, w) in scratch.wrench.iter_mut().enumerate() {
+            w[..width].copy_from_slice(&wrench[c * n + start..][..width]);
+        }
+        self.rk4_chunk(scratch, dt);
+        for (c, x) in scratch.x.iter().enumerate() {
+            state[c * n + start..][..width].copy_from_slice(&x[..width]);
+        }
+    }
+}
+
+/// The quaternion `q` scaled to unit length (after each step, against the drift of
+/// integrating `q̇`).
+#[inline(always)]
+fn normalized(q: [f32; 4]) -> [f32; 4] {
+    let [w, x, y, z] = q;
+    let inv = 1.0 / (w * w + x * x + y * y + z * z).sqrt();
+    [w * inv, x * inv, y * inv, z * inv]
+}
+
 /// The largest horizontal acceleration sustainable at constant altitude with
 /// [`THRUST_HEADROOM`] of the maximum thrust, m/s² (zero if that thrust cannot carry the weight).
 fn derived_max_acceleration(desc: &RobotDescription) -> f64 {
@@ -366,63 +544,51 @@ impl Dynamics for Quadrotor {
         if n == 0 {
             return;
         }
-        let [_, _, _, vx, vy, vz, qw, qx, qy, qz, wx, wy, wz] =
-            components::<STATE_COMPONENTS>(state);
+        let x = components::<STATE_COMPONENTS>(state);
         let [_, _, _, _, thrust, tau_x, tau_y, tau_z, rotor_sum] =
             components::<ACTUATION_COMPONENTS>(actuation);
-        let inputs = [
-            vx, vy, vz, qw, qx, qy, qz, wx, wy, wz, thrust, tau_x, tau_y, tau_z, rotor_sum,
-        ];
-        let Physics {
-            inv_mass,
-            gravity,
-            drag_xy,
-            drag_z_excess,
-            inertia: [jx, jy, jz],
-            inv_inertia: [ix, iy, iz],
-        } = self.physics;
+        let wrench = [thrust, tau_x, tau_y, tau_z, rotor_sum];
+        let inputs: [&[f32]; STATE_COMPONENTS + WRENCH] = std::array::from_fn(|c| {
+            if c < STATE_COMPONENTS {
+                x[c]
+            } else {
+                wrench[c - STATE_COMPONENTS]
+            }
+        });
         chunked(
             n,
             inputs,
             components_mut::<STATE_COMPONENTS>(out),
             |inp, out| {
-                let [vx, vy, vz, qw, qx, qy, qz, wx, wy, wz, thrust, tau_x, tau_y, tau_z, rotor_sum] =
-                    inp;
-                let [dpx, dpy, dpz, dvx, dvy, dvz, dqw, dqx, dqy, dqz, dwx, dwy, dwz] = out;
-                for i in 0..CHUNK {
-                    // Body z axis in the world frame (third column of the rotation matrix).
-                    let (w, x, y, z) = (qw[i], qx[i], qy[i], qz[i]);
-                    let (x2, y2) = (x + x, y + y);
-                    let bx = x2 * z + y2 * w;
-                    let by = y2 * z - x2 * w;
-                    let bz = 1.0 - (x2 * x + y2 * y);
-
-                    // Thrust along b₃; drag −Σω·(c_xy·v + (c_z − c_xy)·(b₃·v)·b₃).
-                    let (v0, v1, v2) = (vx[i], vy[i], vz[i]);
-                    let along =
-                        thrust[i] - drag_z_excess * rotor_sum[i] * (bx * v0 + by * v1 + bz * v2);
-                    let damping = drag_xy * rotor_sum[i];
-                    dpx[i] = v0;
-                    dpy[i] = v1;
-                    dpz[i] = v2;
-                    dvx[i] = (along * bx - damping * v0) * inv_mass;
-                    dvy[i] = (along * by - damping * v1) * inv_mass;
-                    dvz[i] = (along * bz - damping * v2) * inv_mass - gravity;
-
-                    // q̇ = ½ q ⊗ (0, ω).
-                    let (p, q, r) = (wx[i], wy[i], wz[i]);
-                    dqw[i] = -0.5 * (x * p + y * q + z * r);
-                    dqx[i] = 0.5 * (w * p + y * r - z * q);
-                    dqy[i] = 0.5 * (w * q + z * p - x * r);
-                    dqz[i] = 0.5 * (w * r + x * q - y * p);
-
-                    // Euler's equations with the diagonal inertia.
-                    dwx[i] = (tau_x[i] - (jz - jy) * q * r) * ix;
-                    dwy[i] = (tau_y[i] - (jx - jz) * r * p) * iy;
-                    dwz[i] = (tau_z[i] - (jy - jx) * p * q) * iz;
-                }
+                self.slope(
+                    &std::array::from_fn(|c| *inp[c]),
+                    &std::array::from_fn(|c| *inp[STATE_COMPONENTS + c]),
+                    out,
+                )
             },
         );
+    }
+
+    /// Classic RK4 (the rollout's scheme, bit for bit: the same operations in the same order)
+    /// fused over [`CHUNK`]-lane blocks: each block's state, stages, slopes and running sum stay
+    /// in local arrays through all four slope evaluations and the renormalisation, instead of
+    /// passing over the whole batch about a dozen times per step.
+    fn integrate(&self, state: &mut Batch, actuation: &Batch, dt: f32) -> bool {
+        let n = state.lanes();
+        // Component `c` of lane `i` is at `c * n + i` in both batches (component-major).
+        let (state, wrench) = (state.as_mut_slice(), &actuation.as_slice()[THRUST * n..]);
+        let mut scratch = Rk4Chunk::default();
+        for start in (0..n).step_by(CHUNK) {
+            // Whole chunks pass a constant width, so that their copies in and out compile to
+            // inline moves rather than `memcpy` calls.
+            match n - start {
+                width if width >= CHUNK => {
+                    self.rk4_lanes(state, wrench, start, CHUNK, dt, &mut scratch)
+                }
+                width => self.rk4_lanes(state, wrench, start, width, dt, &mut scratch),
+            }
+        }
+        true
     }
 
     fn renormalize(&self, state: &mut Batch) {
@@ -432,12 +598,7 @@ impl Dynamics for Quadrotor {
         }
         let [_, _, _, _, _, _, qw, qx, qy, qz] = components_mut::<10>(state);
         for i in 0..n {
-            let norm2 = qw[i] * qw[i] + qx[i] * qx[i] + qy[i] * qy[i] + qz[i] * qz[i];
-            let inv = 1.0 / norm2.sqrt();
-            qw[i] *= inv;
-            qx[i] *= inv;
-            qy[i] *= inv;
-            qz[i] *= inv;
+            [qw[i], qx[i], qy[i], qz[i]] = normalized([qw[i], qx[i], qy[i], qz[i]]);
         }
     }
 

@@ -102,12 +102,13 @@ struct Line<'a> {
 
 impl<'a> Line<'a> {
     fn new(grid: &'a NeighbourGrid, terminal: &'a [bool], axis: usize) -> Self {
+        // Sized for every endpoint once, so that no line's band reallocates them.
         Line {
             grid,
             terminal,
             axis,
-            near: Vec::new(),
-            envelope: Vec::new(),
+            near: Vec::with_capacity(terminal.len()),
+            envelope: Vec::with_capacity(terminal.len()),
         }
     }
 

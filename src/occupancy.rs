@@ -326,7 +326,13 @@ impl Occupancy {
                 if u128::from_ne_bytes(*flags) == 0 {
                     continue;
                 }
-                let at = first + c * CHECK_CHUNK;
+                let mut at = first + c * CHECK_CHUNK;
+                if at + CHECK_CHUNK > n && n >= CHECK_CHUNK {
+                    // The last lanes: the whole chunk that ends with them. Lanes it shares with
+                    // the chunk before are checked twice, harmlessly (`hit` only accumulates,
+                    // and a point's check always comes out the same).
+                    at = n - CHECK_CHUNK;
+                }
                 if at + CHECK_CHUNK <= n {
                     let lanes = at..at + CHECK_CHUNK;
                     self.mark_chunk(
@@ -336,7 +342,7 @@ impl Occupancy {
                         (&mut hit[lanes]).try_into().expect("CHECK_CHUNK lanes"),
                     );
                 } else {
-                    // The last lanes, padded to a whole chunk so that the checks compile to the
+                    // Fewer lanes than a chunk, padded to one so that the checks compile to the
                     // same SIMD code without a scalar remainder loop: padding lanes sit at the
                     // sensor and count as already terminal, and their results are dropped.
                     let width = n - at;

@@ -307,34 +307,80 @@ impl Occupancy {
     pub fn mark_collisions(&self, x: &[f32], y: &[f32], z: &[f32], hit: &mut [u8]) {
         let n = hit.len();
         let (x, y, z) = (&x[..n], &y[..n], &z[..n]);
-        let full = n - n % CHECK_CHUNK;
-        for at in (0..full).step_by(CHECK_CHUNK) {
-            let lanes = at..at + CHECK_CHUNK;
-            self.mark_chunk(
-                chunk_of(x, lanes.clone()),
-                chunk_of(y, lanes.clone()),
-                chunk_of(z, lanes.clone()),
-                (&mut hit[lanes]).try_into().expect("CHECK_CHUNK lanes"),
+        for first in (0..n).step_by(SLAB) {
+            let end = (first + SLAB).min(n);
+            let mut open = [0u8; SLAB];
+            self.open_lanes(
+                &x[first..end],
+                &y[first..end],
+                &z[first..end],
+                &hit[first..end],
+                &mut open,
             );
-        }
-        if full < n {
-            // The last lanes, padded to a whole chunk so that the checks compile to the same
-            // SIMD code without a scalar remainder loop: padding lanes sit at the sensor and
-            // count as already terminal, and their results are dropped.
-            let width = n - full;
-            let pad = |values: &[f32]| {
-                let mut padded = [0f32; CHECK_CHUNK];
-                padded[..width].copy_from_slice(&values[full..]);
-                padded
-            };
-            let mut chunk = [1u8; CHECK_CHUNK];
-            chunk[..width].copy_from_slice(&hit[full..]);
-            self.mark_chunk(&pad(x), &pad(y), &pad(z), &mut chunk);
-            hit[full..].copy_from_slice(&chunk[..width]);
+            let chunks = (end - first).div_ceil(CHECK_CHUNK);
+            for (c, flags) in open.as_chunks::<CHECK_CHUNK>().0[..chunks]
+                .iter()
+                .enumerate()
+            {
+                // A chunk without an open lane needs no lookup: one 128-bit test.
+                if u128::from_ne_bytes(*flags) == 0 {
+                    continue;
+                }
+                let mut at = first + c * CHECK_CHUNK;
+                if at + CHECK_CHUNK > n && n >= CHECK_CHUNK {
+                    // The last lanes: the whole chunk that ends with them. Lanes it shares with
+                    // the chunk before are checked twice, harmlessly (`hit` only accumulates,
+                    // and a point's check always comes out the same).
+                    at = n - CHECK_CHUNK;
+                }
+                if at + CHECK_CHUNK <= n {
+                    let lanes = at..at + CHECK_CHUNK;
+                    self.mark_chunk(
+                        chunk_of(x, lanes.clone()),
+                        chunk_of(y, lanes.clone()),
+                        chunk_of(z, lanes.clone()),
+                        (&mut hit[lanes]).try_into().expect("CHECK_CHUNK lanes"),
+                    );
+                } else {
+                    // Fewer lanes than a chunk, padded to one so that the checks compile to the
+                    // same SIMD code without a scalar remainder loop: padding lanes sit at the
+                    // sensor and count as already terminal, and their results are dropped.
+                    let width = n - at;
+                    let pad = |values: &[f32]| {
+                        let mut padded = [0f32; CHECK_CHUNK];
+                        padded[..width].copy_from_slice(&values[at..]);
+                        padded
+                    };
+                    let mut chunk = [1u8; CHECK_CHUNK];
+                    chunk[..width].copy_from_slice(&hit[at..]);
+                    self.mark_chunk(&pad(x), &pad(y), &pad(z), &mut chunk);
+                    hit[at..].copy_from_slice(&chunk[..width]);
+                }
+            }
         }
     }
 
-    /// [`Occupancy::mark_collisions`] for one chunk of [`CHECK_CHUNK`] lanes.
+    /// Sets `open[i] = 1` for every lane that needs a lookup: not yet terminal, and outside
+    /// the disk the scan shows free in every direction or outside the floor-to-ceiling band.
+    /// Early in a rollout most lanes are inside, and later most are terminal.
+    ///
+    /// One loop over all lanes with non-short-circuit `&`, so that it compiles to 256-bit SIMD
+    /// compares. (Per 16-lane chunk, a count of open lanes compiled to a ragged mix of vector
+    /// and scalar code, and a 16-byte flag array to 512-bit arithmetic, which lowers this
+    /// CPU's clock: both slower.)
+    #[inline(always)]
+    fn open_lanes(&self, x: &[f32], y: &[f32], z: &[f32], hit: &[u8], open: &mut [u8; SLAB]) {
+        let (z_low, z_high) = self.z_range;
+        let n = hit.len();
+        let (x, y, z, open) = (&x[..n], &y[..n], &z[..n], &mut open[..n]);
+        for i in 0..n {
+            let inside =
+                (x[i] * x[i] + y[i] * y[i] < self.inner_sq) & (z[i] >= z_low) & (z[i] <= z_high);
+            open[i] = u8::from(!inside & (hit[i] == 0));
+        }
+    }
+
+    /// Looks up one chunk of [`CHECK_CHUNK`] lanes for [`Occupancy::mark_collisions`].
     #[inline(always)]
     fn mark_chunk(
         &self,
@@ -344,20 +390,6 @@ impl Occupancy {
         hit: &mut [u8; CHECK_CHUNK],
     ) {
         let (z_low, z_high) = self.z_range;
-        // A chunk of lanes that are all already terminal, or all inside the disk the scan
-        // shows free in every direction (and between floor and ceiling), needs no lookup:
-        // early in a rollout that is most of them.
-        // Non-short-circuit `&` and a count rather than `&&` and an early-out flag, so that
-        // this test is SIMD compares and one mask reduction, not a branch per lane.
-        let mut open = 0u32;
-        for i in 0..CHECK_CHUNK {
-            let inside =
-                (x[i] * x[i] + y[i] * y[i] < self.inner_sq) & (z[i] >= z_low) & (z[i] <= z_high);
-            open += u32::from(!inside & (hit[i] == 0));
-        }
-        if open == 0 {
-            return;
-        }
         let table: &[f32; BINS] = self.limit_sq[..BINS].try_into().expect("BINS entries");
         // Branch-free over lanes with an i32 bin index, so the loop compiles to SIMD gathers.
         for i in 0..CHECK_CHUNK {
@@ -371,6 +403,10 @@ impl Occupancy {
         }
     }
 }
+
+/// Lanes whose open flags [`Occupancy::mark_collisions`] works out at once (a multiple of
+/// [`CHECK_CHUNK`]; a rollout block is 160).
+const SLAB: usize = 256;
 
 /// Lanes checked together by [`Occupancy::mark_collisions`]: one AVX-512 register of `f32`.
 const CHECK_CHUNK: usize = 16;

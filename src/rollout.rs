@@ -107,11 +107,13 @@ fn roll_out_block(
             }
             &commands
         };
-        model.actuate(&state, commands, axes, &mut actuation);
-        if !model.integrate(&mut state, &actuation, dt) {
-            integrator
-                .get_or_insert_with(|| Rk4::new(model.state_components(), n))
-                .step(model, &mut state, &actuation, dt);
+        if !model.actuate_and_integrate(&mut state, commands, axes, dt) {
+            model.actuate(&state, commands, axes, &mut actuation);
+            if !model.integrate(&mut state, &actuation, dt) {
+                integrator
+                    .get_or_insert_with(|| Rk4::new(model.state_components(), n))
+                    .step(model, &mut state, &actuation, dt);
+            }
         }
         if hit.contains(&0) {
             let [x, y, z] = POSITION_COMPONENTS.map(|c| state.component(c));

@@ -77,6 +77,22 @@ pub trait Dynamics: Send + Sync + std::fmt::Debug {
         false
     }
 
+    /// Actuates and advances `state` by `dt` in one pass, for models whose actuation depends
+    /// on the commands alone (no feedback from the state): the rollout then skips writing the
+    /// actuation batch and reading it back every step. Returns `false` (the default) to have
+    /// the rollout call [`Dynamics::actuate`] and then integrate. A model that returns `true`
+    /// must produce exactly what [`Dynamics::actuate`] followed by [`Dynamics::integrate`]
+    /// would. `commands` is laid out as for [`Dynamics::actuate`].
+    fn actuate_and_integrate(
+        &self,
+        _state: &mut Batch,
+        _commands: &[f32],
+        _axes: CommandAxes,
+        _dt: f32,
+    ) -> bool {
+        false
+    }
+
     /// Restores invariants after a step (e.g. unit quaternions). Does nothing by default.
     fn renormalize(&self, _state: &mut Batch) {}
 

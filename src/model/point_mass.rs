@@ -94,6 +94,36 @@ impl Dynamics for PointMass {
         true
     }
 
+    /// [`Dynamics::actuate`] and [`Dynamics::integrate`] fused: the same arithmetic, lane by
+    /// lane, without the actuation batch in between (half the memory traffic of a step).
+    fn actuate_and_integrate(
+        &self,
+        state: &mut Batch,
+        commands: &[f32],
+        axes: CommandAxes,
+        dt: f32,
+    ) -> bool {
+        let bound = self.max_acceleration as f32;
+        let lanes = state.lanes();
+        let commanded = axes.count() * lanes;
+        let (positions, velocities) = state.as_mut_slice().split_at_mut(VX * lanes);
+        let (positions, idle_positions) = positions.split_at_mut(commanded);
+        let (velocities, idle_velocities) = velocities.split_at_mut(commanded);
+        for ((p, v), &c) in positions.iter_mut().zip(velocities).zip(commands) {
+            let a = bound * c.clamp(-1.0, 1.0);
+            *p += dt * (*v + 0.5 * dt * a);
+            *v += dt * a;
+        }
+        // The axes without commands, under the zero acceleration `actuate` writes for them
+        // (the same expressions, so that signed zeros come out as they would there).
+        let a = 0.0;
+        for (p, v) in idle_positions.iter_mut().zip(idle_velocities) {
+            *p += dt * (*v + 0.5 * dt * a);
+            *v += dt * a;
+        }
+        true
+    }
+
     fn collision_radius(&self) -> f64 {
         self.radius
     }

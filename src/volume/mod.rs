@@ -163,12 +163,17 @@ impl Cloud {
         for (i, p) in points.iter().enumerate() {
             if p[..dims].iter().all(|c| c.is_finite()) {
                 let q = if dims == 2 { [p[0], p[1], 0.0] } else { *p };
-                for a in 0..dims {
-                    lo[a] = lo[a].min(q[a]);
-                    hi[a] = hi[a].max(q[a]);
-                }
                 kept.push(q);
                 labels.push(terminal.get(i).copied().unwrap_or(false));
+            }
+        }
+        // The bounding box over all three axes (those past `dims` are 0 and unused): with a
+        // fixed count the bounds stay in registers, where a loop to `dims` kept them in memory
+        // as a store-to-load chain through every point.
+        for q in &kept {
+            for a in 0..3 {
+                lo[a] = lo[a].min(q[a]);
+                hi[a] = hi[a].max(q[a]);
             }
         }
         if !kept.is_empty() {

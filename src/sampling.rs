@@ -90,8 +90,8 @@ impl Controls {
     }
 }
 
-/// Draws `lanes` control trajectories of `steps` held commands each; the same arguments always
-/// give bit-identical controls.
+/// Draws `lanes` control trajectories of `steps` held commands each, ordered by heading (see
+/// [`order_by_heading`]); the same arguments always give bit-identical controls.
 pub fn sample(
     kind: SamplerKind,
     lanes: usize,
@@ -99,6 +99,13 @@ pub fn sample(
     axes: CommandAxes,
     seed: u64,
 ) -> Controls {
+    let mut controls = draw(kind, lanes, steps, axes, seed);
+    order_by_heading(&mut controls);
+    controls
+}
+
+/// The trajectories of [`sample`] in the order the sampler draws them.
+fn draw(kind: SamplerKind, lanes: usize, steps: usize, axes: CommandAxes, seed: u64) -> Controls {
     let mut controls = Controls {
         lanes,
         steps,
@@ -145,6 +152,38 @@ pub fn sample(
         }
     }
     controls
+}
+
+/// Reorders the lanes by the heading of the displacement their commands alone would produce
+/// (each step's command weighted by the time left after it), so that neighbouring lanes fly
+/// in similar directions: they leave the free disk around the robot and meet obstacles at
+/// similar steps, and the path-wise collision checks skip whole chunks of lanes that are all
+/// inside or all terminal. The set of trajectories, and so every volume, is unchanged.
+fn order_by_heading(controls: &mut Controls) {
+    let (lanes, steps) = (controls.lanes, controls.steps);
+    let heading = |lane: usize| {
+        let mut d = [0.0f64; 2];
+        for k in 0..steps {
+            // The command of step k acts for the rest of the horizon (its middle, on average).
+            let weight = (steps - k) as f64 - 0.5;
+            for (axis, d) in d.iter_mut().enumerate() {
+                *d += weight * controls.get(k, axis, lane) as f64;
+            }
+        }
+        d[1].atan2(d[0])
+    };
+    let mut order: Vec<(f64, usize)> = (0..lanes).map(|lane| (heading(lane), lane)).collect();
+    order.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+    let drawn = controls.data.clone();
+    for (row, from) in controls
+        .data
+        .chunks_exact_mut(lanes.max(1))
+        .zip(drawn.chunks_exact(lanes.max(1)))
+    {
+        for (to, &(_, lane)) in row.iter_mut().zip(&order) {
+            *to = from[lane];
+        }
+    }
 }
 
 /// Harmonics in the Fourier sampler (the paper prototype's 5 sine + 5 cosine terms).
@@ -282,6 +321,40 @@ mod tests {
         // Expected shares 1/5, 2/5, 2/5 (two switches in the same step merge into none).
         assert!(by_switches.iter().all(|&n| n > 60), "{by_switches:?}");
         assert!((200..300).contains(&positive_start), "{positive_start}");
+    }
+
+    #[test]
+    fn lanes_come_ordered_by_heading_with_the_trajectories_drawn() {
+        for kind in SamplerKind::ALL {
+            let drawn = draw(kind, 150, 100, CommandAxes::Spatial, 9);
+            let sampled = sample(kind, 150, 100, CommandAxes::Spatial, 9);
+            let curve = |c: &Controls, lane: usize| -> Vec<u32> {
+                (0..100)
+                    .flat_map(|k| (0..3).map(move |a| (k, a)))
+                    .map(|(k, a)| c.get(k, a, lane).to_bits())
+                    .collect()
+            };
+            let mut want: Vec<Vec<u32>> = (0..150).map(|l| curve(&drawn, l)).collect();
+            let mut got: Vec<Vec<u32>> = (0..150).map(|l| curve(&sampled, l)).collect();
+            // Headings of the displacement the commands alone give, lane by lane.
+            let headings: Vec<f64> = (0..150)
+                .map(|lane| {
+                    let d = |a: usize| -> f64 {
+                        (0..100)
+                            .map(|k| (99.5 - k as f64) * sampled.get(k, a, lane) as f64)
+                            .sum()
+                    };
+                    d(1).atan2(d(0))
+                })
+                .collect();
+            assert!(
+                headings.windows(2).all(|w| w[0] <= w[1] + 1e-9),
+                "{kind:?}: {headings:?}"
+            );
+            want.sort_unstable();
+            got.sort_unstable();
+            assert_eq!(got, want, "{kind:?}: not the same trajectories");
+        }
     }
 
     #[test]

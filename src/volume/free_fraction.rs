@@ -12,11 +12,14 @@
 //! `(t − tᵢ)² + aᵢ` (t along the line, aᵢ the squared distance across it), and the lower
 //! envelope of these parabolas — a 1D Voronoi diagram, built in linear time — splits the hull's
 //! chord into intervals owned by one endpoint each. Only endpoints near the line take part; the
-//! band is widened until the envelope provably beats every endpoint outside it. The only
-//! approximation is the midpoint rule across columns.
+//! band is widened until the envelope provably beats every endpoint outside it. In 2D the band
+//! slides across the columns as a run of strips kept sorted along the line (`strips.rs`); in 3D
+//! each line gathers its band from the neighbour grid. The only approximation is the midpoint
+//! rule across columns.
 
 use super::hull::{Polygon, Polyhedron};
 use super::neighbours::NeighbourGrid;
+use super::strips::{Band, Strips};
 
 /// Columns across a 2D hull. The free length along a column is a continuous, piecewise smooth
 /// function of the column position, so the midpoint rule converges fast: against a
@@ -29,30 +32,51 @@ pub(crate) const COLUMNS_2D: usize = 32;
 /// reference (16²: 0.0065, 32²: 0.0023).
 pub(crate) const COLUMNS_3D: usize = 24;
 
-/// Share of `hull` whose nearest endpoint (in `grid`) is free (`!terminal[i]`); `None` if no
-/// column met the hull (cannot happen for a hull with positive area).
+/// Share of `hull` whose nearest endpoint among `points` is free (`!terminal[i]`); `None` if
+/// no column met the hull (cannot happen for a hull with positive area).
 pub(crate) fn free_fraction_2d(
     hull: &Polygon,
-    grid: &NeighbourGrid,
+    points: &[[f64; 3]],
     terminal: &[bool],
 ) -> Option<f64> {
-    free_fraction_2d_with(hull, grid, terminal, COLUMNS_2D)
+    free_fraction_2d_with(hull, points, terminal, COLUMNS_2D)
 }
 
 fn free_fraction_2d_with(
     hull: &Polygon,
-    grid: &NeighbourGrid,
+    points: &[[f64; 3]],
     terminal: &[bool],
     columns: usize,
 ) -> Option<f64> {
     let (lo, hi) = (hull.lo(), hull.hi());
     let dx = (hi[0] - lo[0]) / columns as f64;
-    let mut line = Line::new(grid, terminal, 1);
+    // One strip per column, centred on it.
+    let strips = Strips::new(points, terminal, lo[0], dx, columns);
+    let mut band = Band::new(&strips);
+    let mut envelope = Vec::with_capacity(points.len());
+    // A first reach that holds about two endpoints per reach² of the hull, as a grid cell does.
+    let first_reach = (2.0 * hull.area() / points.len().max(1) as f64).sqrt();
     let mut tally = [0.0; 2];
     for i in 0..columns {
         let x = lo[0] + (i as f64 + 0.5) * dx;
-        if let Some([bottom, top]) = hull.boundary_at(x) {
-            line.add(&[x, 0.0, 0.0], bottom.y, top.y, &mut tally);
+        let Some([bottom, top]) = hull.boundary_at(x) else {
+            continue;
+        };
+        let mut reach = first_reach;
+        loop {
+            let covered = band.cover(x, reach);
+            let near = band.members();
+            let parabola = |k: usize| (near[k].y, (near[k].x - x) * (near[k].x - x));
+            lower_envelope(near.len(), parabola, &mut envelope);
+            let chord = measure_chord(&envelope, parabola, |k| near[k].free, bottom.y, top.y);
+            if chord.worst <= covered * covered || covered == f64::INFINITY {
+                tally[0] += chord.free;
+                tally[1] += top.y - bottom.y;
+                break;
+            }
+            // A band reaching past the worst point of this envelope holds an envelope no
+            // higher anywhere, so the next pass is certain (at least one strip is added).
+            reach = chord.worst.sqrt().max(covered * (1.0 + 1e-9));
         }
     }
     (tally[1] > 0.0).then(|| tally[0] / tally[1])
@@ -61,10 +85,11 @@ fn free_fraction_2d_with(
 /// The 3D counterpart of [`free_fraction_2d`].
 pub(crate) fn free_fraction_3d(
     hull: &Polyhedron,
-    grid: &NeighbourGrid,
+    points: &[[f64; 3]],
     terminal: &[bool],
 ) -> Option<f64> {
-    free_fraction_3d_with(hull, grid, terminal, COLUMNS_3D)
+    let grid = NeighbourGrid::new(points, 3);
+    free_fraction_3d_with(hull, &grid, terminal, COLUMNS_3D)
 }
 
 fn free_fraction_3d_with(
@@ -75,7 +100,7 @@ fn free_fraction_3d_with(
 ) -> Option<f64> {
     let (lo, hi) = (hull.lo(), hull.hi());
     let d = [0, 1].map(|a| (hi[a] - lo[a]) / columns as f64);
-    let mut line = Line::new(grid, terminal, 2);
+    let mut line = Line::new(grid, terminal);
     let mut tally = [0.0; 2];
     for iy in 0..columns {
         let y = lo[1] + (iy as f64 + 0.5) * d[1];
@@ -89,11 +114,11 @@ fn free_fraction_3d_with(
     (tally[1] > 0.0).then(|| tally[0] / tally[1])
 }
 
-/// Nearest-endpoint labelling along axis-parallel lines, with buffers reused between lines.
+/// Nearest-endpoint labelling along vertical lines through the neighbour grid (the 3D
+/// columns), with buffers reused between lines.
 struct Line<'a> {
     grid: &'a NeighbourGrid,
     terminal: &'a [bool],
-    axis: usize,
     /// Endpoints near the current line: (along, squared distance across, index), sorted.
     near: Vec<(f64, f64, u32)>,
     /// Lower envelope: (start of the interval, entry of `near` owning it), in order.
@@ -101,45 +126,36 @@ struct Line<'a> {
 }
 
 impl<'a> Line<'a> {
-    fn new(grid: &'a NeighbourGrid, terminal: &'a [bool], axis: usize) -> Self {
+    fn new(grid: &'a NeighbourGrid, terminal: &'a [bool]) -> Self {
         // Sized for every endpoint once, so that no line's band reallocates them.
         Line {
             grid,
             terminal,
-            axis,
             near: Vec::with_capacity(terminal.len()),
             envelope: Vec::with_capacity(terminal.len()),
         }
     }
 
-    /// Adds to `tally` (free length, total length) the chord `[bottom, top]` of the line through
-    /// `at` (its coordinate along `axis` is ignored).
+    /// Adds to `tally` (free length, total length) the chord `[bottom, top]` of the vertical
+    /// line through `at` (its z is ignored).
     fn add(&mut self, at: &[f64; 3], bottom: f64, top: f64, tally: &mut [f64; 2]) {
         let mut reach = self.grid.cell();
         loop {
             let complete = self
                 .grid
-                .near_line(at, self.axis, [bottom, top], reach, &mut self.near);
-            lower_envelope(&self.near, &mut self.envelope);
-            let mut free = 0.0;
-            let mut certain = true;
-            for (k, &(start, owner)) in self.envelope.iter().enumerate() {
-                let end = self.envelope.get(k + 1).map_or(f64::INFINITY, |e| e.0);
-                let (s0, s1) = (start.max(bottom), end.min(top));
-                if s1 <= s0 {
-                    continue;
-                }
-                let (t, across, index) = self.near[owner];
-                if !self.terminal[index as usize] {
-                    free += s1 - s0;
-                }
-                // The envelope is exact where it is below every endpoint left out (all farther
-                // than `reach` from the line); it is convex per interval, so check the ends.
-                let worst = ((s0 - t) * (s0 - t)).max((s1 - t) * (s1 - t)) + across;
-                certain &= worst <= reach * reach;
-            }
-            if complete || certain {
-                tally[0] += free;
+                .near_line(at, 2, [bottom, top], reach, &mut self.near);
+            let near = &self.near;
+            let parabola = |k: usize| (near[k].0, near[k].1);
+            lower_envelope(near.len(), parabola, &mut self.envelope);
+            let chord = measure_chord(
+                &self.envelope,
+                parabola,
+                |k| !self.terminal[near[k].2 as usize],
+                bottom,
+                top,
+            );
+            if complete || chord.worst <= reach * reach {
+                tally[0] += chord.free;
                 tally[1] += top - bottom;
                 return;
             }
@@ -148,21 +164,68 @@ impl<'a> Line<'a> {
     }
 }
 
-/// Lower envelope of the parabolas `(t − tᵢ)² + aᵢ` for `near` sorted by `tᵢ`, as the start
-/// of each envelope interval and the parabola owning it (the first starts at −∞).
+/// What the lower envelope of a line's parabolas says about its chord `[bottom, top]`.
+struct Chord {
+    /// Length of the chord owned by free endpoints.
+    free: f64,
+    /// The envelope's largest value on the chord: every point of the chord has an endpoint of
+    /// the band within this squared distance. The envelope is exact wherever it lies below
+    /// every endpoint left out of the band, so it is exact on the whole chord when every
+    /// endpoint left out is farther than this.
+    worst: f64,
+}
+
+/// Measures the chord `[bottom, top]` under `envelope` (from [`lower_envelope`] over
+/// `parabola`); `free(k)` is the label of parabola `k`.
+fn measure_chord(
+    envelope: &[(f64, usize)],
+    parabola: impl Fn(usize) -> (f64, f64),
+    free: impl Fn(usize) -> bool,
+    bottom: f64,
+    top: f64,
+) -> Chord {
+    let mut chord = Chord {
+        free: 0.0,
+        worst: 0.0,
+    };
+    for (k, &(start, owner)) in envelope.iter().enumerate() {
+        let end = envelope.get(k + 1).map_or(f64::INFINITY, |e| e.0);
+        let (s0, s1) = (start.max(bottom), end.min(top));
+        if s1 <= s0 {
+            continue;
+        }
+        let (t, across) = parabola(owner);
+        if free(owner) {
+            chord.free += s1 - s0;
+        }
+        // Each piece of the envelope is convex, so its largest value is at an end.
+        let worst = ((s0 - t) * (s0 - t)).max((s1 - t) * (s1 - t)) + across;
+        chord.worst = chord.worst.max(worst);
+    }
+    chord
+}
+
+/// Lower envelope of the `count` parabolas `(t − tᵢ)² + aᵢ`, `(tᵢ, aᵢ) = parabola(i)` sorted
+/// by `tᵢ`, as the start of each envelope interval and the parabola owning it (the first
+/// starts at −∞).
 ///
 /// Two such parabolas cross once, at `(tᵢ + tⱼ)/2 + (aⱼ − aᵢ) / (2(tⱼ − tᵢ))`; scanning in
 /// order of `tᵢ` and popping parabolas that a newer one overtakes before their interval starts
 /// gives the envelope in linear time (Felzenszwalb & Huttenlocher's distance transform).
-fn lower_envelope(near: &[(f64, f64, u32)], envelope: &mut Vec<(f64, usize)>) {
+fn lower_envelope(
+    count: usize,
+    parabola: impl Fn(usize) -> (f64, f64),
+    envelope: &mut Vec<(f64, usize)>,
+) {
     envelope.clear();
-    for (j, &(tj, aj, _)) in near.iter().enumerate() {
+    for j in 0..count {
+        let (tj, aj) = parabola(j);
         loop {
             let Some(&(start, i)) = envelope.last() else {
                 envelope.push((f64::NEG_INFINITY, j));
                 break;
             };
-            let (ti, ai, _) = near[i];
+            let (ti, ai) = parabola(i);
             if tj == ti {
                 // Same position along the line: the one closer to it wins everywhere.
                 if aj < ai {
@@ -204,7 +267,7 @@ mod tests {
                 .collect();
             near.sort_by(|a, b| a.0.total_cmp(&b.0));
             let mut env = Vec::new();
-            lower_envelope(&near, &mut env);
+            lower_envelope(near.len(), |k| (near[k].0, near[k].1), &mut env);
             assert!(env.windows(2).all(|w| w[0].0 < w[1].0));
             for k in 0..=400 {
                 let t = -0.5 + 3.0 * k as f64 / 400.0;
@@ -236,14 +299,14 @@ mod tests {
                     .iter()
                     .map(|p| p[0] > 0.6 || (p[0] + 0.5).powi(2) + (p[1] - 0.4).powi(2) < 0.09)
                     .collect();
-                let grid = NeighbourGrid::new(&pts, dims);
                 let (got, reference) = if dims == 2 {
                     let hull = Polygon::hull(&pts).expect("hull");
                     (
-                        free_fraction_2d_with(&hull, &grid, &terminal, columns),
-                        free_fraction_2d_with(&hull, &grid, &terminal, 4096),
+                        free_fraction_2d_with(&hull, &pts, &terminal, columns),
+                        free_fraction_2d_with(&hull, &pts, &terminal, 4096),
                     )
                 } else {
+                    let grid = NeighbourGrid::new(&pts, dims);
                     let hull = Polyhedron::hull(&pts).expect("hull");
                     (
                         free_fraction_3d_with(&hull, &grid, &terminal, columns),

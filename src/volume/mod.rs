@@ -31,6 +31,7 @@ mod frame;
 mod free_fraction;
 mod hull;
 mod neighbours;
+mod strips;
 #[cfg(test)]
 mod test_points;
 mod union;
@@ -204,8 +205,9 @@ trait ConvexBody: Sized {
     fn vertex_count(&self) -> usize;
     /// Volume of the union of `bodies`.
     fn union_measure(bodies: &[Self]) -> f64;
-    /// Free share of the body by nearest-endpoint labelling; `None` if unmeasurable.
-    fn free_fraction(&self, grid: &NeighbourGrid, terminal: &[bool]) -> Option<f64>;
+    /// Free share of the body by nearest-endpoint labelling of `points`; `None` if
+    /// unmeasurable.
+    fn free_fraction(&self, points: &[[f64; 3]], terminal: &[bool]) -> Option<f64>;
 }
 
 impl ConvexBody for Polygon {
@@ -221,8 +223,8 @@ impl ConvexBody for Polygon {
     fn union_measure(bodies: &[Self]) -> f64 {
         union::union_area(bodies)
     }
-    fn free_fraction(&self, grid: &NeighbourGrid, terminal: &[bool]) -> Option<f64> {
-        free_fraction::free_fraction_2d(self, grid, terminal)
+    fn free_fraction(&self, points: &[[f64; 3]], terminal: &[bool]) -> Option<f64> {
+        free_fraction::free_fraction_2d(self, points, terminal)
     }
 }
 
@@ -239,8 +241,8 @@ impl ConvexBody for Polyhedron {
     fn union_measure(bodies: &[Self]) -> f64 {
         union::union_volume(bodies)
     }
-    fn free_fraction(&self, grid: &NeighbourGrid, terminal: &[bool]) -> Option<f64> {
-        free_fraction::free_fraction_3d(self, grid, terminal)
+    fn free_fraction(&self, points: &[[f64; 3]], terminal: &[bool]) -> Option<f64> {
+        free_fraction::free_fraction_3d(self, points, terminal)
     }
 }
 
@@ -279,9 +281,8 @@ fn estimate_with<B: ConvexBody>(cloud: &Cloud, kind: EstimatorKind) -> Volumes {
             let free_share = if terminal_count == 0 || terminal_count == points.len() {
                 endpoint_share
             } else {
-                let grid = NeighbourGrid::new(points, cloud.dims);
                 reach
-                    .free_fraction(&grid, &cloud.terminal)
+                    .free_fraction(points, &cloud.terminal)
                     .unwrap_or(endpoint_share)
             };
             Volumes {

@@ -41,19 +41,25 @@ impl Frame {
         if points.len() < dims + 1 {
             return None;
         }
+        // Sums over all three axes, the ones past `dims` taken as 0: with a fixed count the
+        // sums stay in registers, where loops to `dims` kept them in memory as a store-to-load
+        // chain through every point.
+        let used = |p: &[f64; 3]| [p[0], p[1], if dims == 3 { p[2] } else { 0.0 }];
         let inv_n = 1.0 / points.len() as f64;
         let mut mean = [0.0; 3];
         for p in points {
-            for a in 0..dims {
-                mean[a] += p[a];
+            let q = used(p);
+            for a in 0..3 {
+                mean[a] += q[a];
             }
         }
         mean.iter_mut().for_each(|m| *m *= inv_n);
         let mut cov = [[0.0; 3]; 3];
         for p in points {
-            let d = [p[0] - mean[0], p[1] - mean[1], p[2] - mean[2]];
-            for r in 0..dims {
-                for c in r..dims {
+            let q = used(p);
+            let d = [q[0] - mean[0], q[1] - mean[1], q[2] - mean[2]];
+            for r in 0..3 {
+                for c in r..3 {
                     cov[r][c] += d[r] * d[c];
                 }
             }
@@ -83,11 +89,12 @@ impl Frame {
         mean: [f64; 3],
         axes: [[f64; 3]; 3],
     ) -> Option<Frame> {
+        // Over all three axes, for the reason given in `fit`; those past `dims` are unused.
         let mut lo = [f64::INFINITY; 3];
         let mut hi = [f64::NEG_INFINITY; 3];
         for p in points {
             let d = [p[0] - mean[0], p[1] - mean[1], p[2] - mean[2]];
-            for a in 0..dims {
+            for a in 0..3 {
                 let u = dot(&axes[a], &d);
                 lo[a] = lo[a].min(u);
                 hi[a] = hi[a].max(u);

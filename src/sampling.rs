@@ -90,8 +90,9 @@ impl Controls {
     }
 }
 
-/// Draws `lanes` control trajectories of `steps` held commands each, ordered by heading (see
-/// [`order_by_heading`]); the same arguments always give bit-identical controls.
+/// Draws `lanes` control trajectories of `steps` held commands each, ordered by the heading of
+/// their commands (neighbouring lanes fly alike, which the collision checks exploit); the same
+/// arguments always give bit-identical controls.
 pub fn sample(
     kind: SamplerKind,
     lanes: usize,
@@ -174,14 +175,11 @@ fn order_by_heading(controls: &mut Controls) {
     };
     let mut order: Vec<(f64, usize)> = (0..lanes).map(|lane| (heading(lane), lane)).collect();
     order.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-    let drawn = controls.data.clone();
-    for (row, from) in controls
-        .data
-        .chunks_exact_mut(lanes.max(1))
-        .zip(drawn.chunks_exact(lanes.max(1)))
-    {
+    let mut drawn = vec![0.0; lanes];
+    for row in controls.data.chunks_exact_mut(lanes.max(1)) {
+        drawn.copy_from_slice(row);
         for (to, &(_, lane)) in row.iter_mut().zip(&order) {
-            *to = from[lane];
+            *to = drawn[lane];
         }
     }
 }

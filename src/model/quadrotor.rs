@@ -570,7 +570,7 @@ impl Dynamics for Quadrotor {
     }
 
     /// Classic RK4 (the rollout's scheme, bit for bit: the same operations in the same order)
-    /// fused over [`CHUNK`]-lane blocks: each block's state, stages, slopes and running sum stay
+    /// fused over `CHUNK`-lane blocks: each block's state, stages, slopes and running sum stay
     /// in local arrays through all four slope evaluations and the renormalisation, instead of
     /// passing over the whole batch about a dozen times per step.
     fn integrate(&self, state: &mut Batch, actuation: &Batch, dt: f32) -> bool {

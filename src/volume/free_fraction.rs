@@ -63,6 +63,7 @@ fn free_fraction_2d_with(
             continue;
         };
         let mut reach = first_reach;
+        let mut covered_before = 0.0;
         loop {
             let covered = band.cover(x, reach);
             let near = band.members();
@@ -75,8 +76,14 @@ fn free_fraction_2d_with(
                 break;
             }
             // A band reaching past the worst point of this envelope holds an envelope no
-            // higher anywhere, so the next pass is certain (at least one strip is added).
-            reach = chord.worst.sqrt().max(covered * (1.0 + 1e-9));
+            // higher anywhere, so the next pass is certain, up to rounding: should a pass not
+            // widen the band (coordinates huge against the strips), the next takes them all.
+            reach = if covered > covered_before {
+                chord.worst.sqrt().max(covered * (1.0 + 1e-9))
+            } else {
+                f64::INFINITY
+            };
+            covered_before = covered;
         }
     }
     (tally[1] > 0.0).then(|| tally[0] / tally[1])
@@ -186,7 +193,12 @@ fn measure_chord(
 ) -> Chord {
     let mut chord = Chord {
         free: 0.0,
-        worst: 0.0,
+        // Without an endpoint in the band nothing bounds the distance to the nearest one.
+        worst: if envelope.is_empty() {
+            f64::INFINITY
+        } else {
+            0.0
+        },
     };
     for (k, &(start, owner)) in envelope.iter().enumerate() {
         let end = envelope.get(k + 1).map_or(f64::INFINITY, |e| e.0);
@@ -280,6 +292,80 @@ mod tests {
                 assert!((f(&near[env[seg].1]) - best).abs() < 1e-12, "m {m} t {t}");
             }
         }
+    }
+
+    /// The 2D free fraction against the same measurement with every endpoint on every column
+    /// (no band, nothing to prove): sparse, clustered, flat and tall clouds, where the band
+    /// near a column is often empty or too narrow at first. Lattice clouds are left out: their
+    /// ties between equidistant endpoints may fall either way.
+    #[test]
+    fn the_band_gives_what_every_endpoint_gives() {
+        let reference = |hull: &Polygon, points: &[[f64; 3]], terminal: &[bool]| {
+            let mut order: Vec<usize> = (0..points.len()).collect();
+            order.sort_by(|&a, &b| points[a][1].total_cmp(&points[b][1]));
+            let (lo, hi) = (hull.lo(), hull.hi());
+            let dx = (hi[0] - lo[0]) / COLUMNS_2D as f64;
+            let mut envelope = Vec::new();
+            let mut tally = [0.0; 2];
+            for i in 0..COLUMNS_2D {
+                let x = lo[0] + (i as f64 + 0.5) * dx;
+                let Some([bottom, top]) = hull.boundary_at(x) else {
+                    continue;
+                };
+                let parabola = |k: usize| {
+                    let p = points[order[k]];
+                    (p[1], (p[0] - x) * (p[0] - x))
+                };
+                lower_envelope(order.len(), parabola, &mut envelope);
+                let free = |k: usize| !terminal[order[k]];
+                let chord = measure_chord(&envelope, parabola, free, bottom.y, top.y);
+                tally[0] += chord.free;
+                tally[1] += top.y - bottom.y;
+            }
+            tally[0] / tally[1]
+        };
+        // The smallest case that once went wrong: no endpoint near the middle columns.
+        let three = [[-1.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.02, 0.0]];
+        let labels = [false, false, true];
+        let hull = Polygon::hull(&three).expect("hull");
+        let got = free_fraction_2d(&hull, &three, &labels).expect("fraction");
+        assert!(
+            (got - reference(&hull, &three, &labels)).abs() < 1e-12,
+            "{got}"
+        );
+
+        let mut rng = ChaCha8Rng::seed_from_u64(11);
+        let mut compared = 0;
+        for n in [3, 4, 7, 20, 150] {
+            for _ in 0..20 {
+                let point = |rng: &mut ChaCha8Rng, shape: usize, k: usize| -> [f64; 3] {
+                    let mut u = || rng.random::<f64>() * 2.0 - 1.0;
+                    match shape {
+                        // A tight blob with a few endpoints far out.
+                        0 if !k.is_multiple_of(10) => [0.01 * u(), 0.01 * u(), 0.0],
+                        0 => [10.0 * u(), 10.0 * u(), 0.0],
+                        1 => [1e3 * u(), 1e-3 * u(), 0.0],
+                        2 => [1e-3 * u(), 1e3 * u(), 0.0],
+                        _ => [u(), u(), 0.0],
+                    }
+                };
+                for shape in 0..4 {
+                    let points: Vec<[f64; 3]> = (0..n).map(|k| point(&mut rng, shape, k)).collect();
+                    let terminal: Vec<bool> = (0..n).map(|_| rng.random::<f64>() < 0.4).collect();
+                    let Some(hull) = Polygon::hull(&points) else {
+                        continue;
+                    };
+                    let got = free_fraction_2d(&hull, &points, &terminal).expect("fraction");
+                    let want = reference(&hull, &points, &terminal);
+                    assert!(
+                        (got - want).abs() < 1e-9,
+                        "n {n} shape {shape}: {got} vs {want}"
+                    );
+                    compared += 1;
+                }
+            }
+        }
+        assert!(compared > 300, "{compared}");
     }
 
     /// Uniform points in [-1, 1]² labelled terminal inside a wall (x > 0.6) or a round

@@ -34,8 +34,8 @@ pub(crate) struct Strips {
 }
 
 impl Strips {
-    /// Buckets `points` (x, y; z is ignored) labelled by `terminal` into `count ≥ 1` strips of
-    /// `width > 0` starting at `lo`.
+    /// Buckets `points` (x, y; z is ignored) with their `terminal` labels, pairwise, into
+    /// `count ≥ 1` strips of `width > 0` starting at `lo`.
     pub(crate) fn new(
         points: &[[f64; 3]],
         terminal: &[bool],
@@ -43,57 +43,44 @@ impl Strips {
         width: f64,
         count: usize,
     ) -> Self {
-        let count = count.max(1);
-        let edge = |s: usize| lo + s as f64 * width;
-        // The division may round a point next to an edge into the neighbouring strip; the
-        // edges themselves decide, so that [`Band::cover`]'s distances hold exactly. (`as`
-        // saturates and maps NaN to 0.)
-        let strip_of = |x: f64| {
-            let s = (((x - lo) / width).floor() as usize).min(count - 1);
-            if s > 0 && x < edge(s) {
-                s - 1
-            } else if s + 1 < count && x >= edge(s + 1) {
-                s + 1
-            } else {
-                s
-            }
-        };
-        let mut start = vec![0usize; count + 1];
-        for p in points {
-            start[strip_of(p[0]) + 1] += 1;
-        }
-        for s in 1..=count {
-            start[s] += start[s - 1];
-        }
-        let mut fill = start.clone();
-        let mut members = vec![
-            Member {
-                y: 0.0,
-                x: 0.0,
-                strip: 0,
-                free: false,
-            };
-            points.len()
-        ];
-        for (i, p) in points.iter().enumerate() {
-            let s = strip_of(p[0]);
-            members[fill[s]] = Member {
-                y: p[1],
-                x: p[0],
-                strip: s as u32,
-                free: !terminal.get(i).copied().unwrap_or(false),
-            };
-            fill[s] += 1;
-        }
-        for s in 0..count {
-            members[start[s]..start[s + 1]].sort_unstable_by(|a, b| a.y.total_cmp(&b.y));
-        }
-        Strips {
+        let mut strips = Strips {
             lo,
             width,
-            members,
-            start,
+            members: Vec::with_capacity(points.len()),
+            start: vec![0; count.max(1) + 1],
+        };
+        let labelled: Vec<(usize, Member)> = points
+            .iter()
+            .zip(terminal)
+            .map(|(p, &terminal)| {
+                let strip = strips.strip_of(p[0]);
+                let member = Member {
+                    y: p[1],
+                    x: p[0],
+                    strip: strip as u32,
+                    free: !terminal,
+                };
+                (strip, member)
+            })
+            .collect();
+        // Counting sort by strip, then each strip's run by y.
+        for &(strip, _) in &labelled {
+            strips.start[strip + 1] += 1;
         }
+        for s in 1..strips.start.len() {
+            strips.start[s] += strips.start[s - 1];
+        }
+        let mut fill = strips.start.clone();
+        strips.members = labelled.iter().map(|&(_, member)| member).collect();
+        for (strip, member) in labelled {
+            strips.members[fill[strip]] = member;
+            fill[strip] += 1;
+        }
+        for s in 0..strips.count() {
+            let run = strips.start[s]..strips.start[s + 1];
+            strips.members[run].sort_unstable_by(|a, b| a.y.total_cmp(&b.y));
+        }
+        strips
     }
 
     /// Number of strips.
@@ -101,14 +88,29 @@ impl Strips {
         self.start.len() - 1
     }
 
+    /// The strip that holds `x`, or the nearest end strip for `x` outside them (NaN → 0). The
+    /// division may round `x` next to an edge into the neighbouring strip; the edges
+    /// themselves decide, so that distances to them bound the distances to the strips' points.
+    fn strip_of(&self, x: f64) -> usize {
+        // `as` saturates (−∞ and NaN → 0, +∞ → usize::MAX).
+        let s = (((x - self.lo) / self.width).floor() as usize).min(self.count() - 1);
+        if s > 0 && x < self.edge(s) {
+            s - 1
+        } else if s + 1 < self.count() && x >= self.edge(s + 1) {
+            s + 1
+        } else {
+            s
+        }
+    }
+
     /// Left edge of strip `s` (`s = count` gives the right edge of the last).
     fn edge(&self, s: usize) -> f64 {
         self.lo + s as f64 * self.width
     }
 
-    /// The strip whose x-range holds `x`, as a signed number (may lie outside the strips).
-    fn strip_at(&self, x: f64) -> f64 {
-        ((x - self.lo) / self.width).floor()
+    /// The members of strip `s`, sorted by y.
+    fn run(&self, s: usize) -> &[Member] {
+        &self.members[self.start[s]..self.start[s + 1]]
     }
 }
 
@@ -141,33 +143,26 @@ impl<'a> Band<'a> {
         &self.members
     }
 
-    /// Makes the band hold at least every endpoint within `reach` (in x) of the line `x = at`,
-    /// dropping strips on its left that lie wholly farther away than that; returns the distance
-    /// from the line within which the band now holds every endpoint (∞ where it holds all of
-    /// them). Lines are expected left to right: strips on the right are never dropped, so a
-    /// band widened for one line still serves the next.
+    /// Makes the band hold every endpoint within `reach` (in x, up to rounding) of the line
+    /// `x = at`, dropping strips on its left that lie wholly farther away than that; returns
+    /// the distance from the line within which the band now holds every endpoint (∞ where it
+    /// holds all of them). Lines are expected left to right: strips on the right are never
+    /// dropped, so a band widened for one line still serves the next.
     pub(crate) fn cover(&mut self, at: f64, reach: f64) -> f64 {
         let strips = self.strips;
-        let top = strips.count() - 1;
-        let to_strip = |x: f64| x.clamp(0.0, top as f64) as usize;
-        let want_first = to_strip(strips.strip_at(at - reach));
-        let want_last = to_strip(strips.strip_at(at + reach));
-        if self.first > self.last {
+        let last_strip = strips.count() - 1;
+        let want_first = strips.strip_of(at - reach);
+        let want_last = strips.strip_of(at + reach);
+        if self.first > self.last || self.last < want_first {
+            // Empty, or every strip held is out of reach: start again from one strip.
             self.first = want_first;
             self.last = want_first;
             self.members.clear();
-            let run = strips.start[want_first]..strips.start[want_first + 1];
-            self.members.extend_from_slice(&strips.members[run]);
-        }
-        if want_first > self.first {
+            self.members.extend_from_slice(strips.run(want_first));
+        } else if want_first > self.first {
             let keep = want_first as u32;
             self.members.retain(|m| m.strip >= keep);
             self.first = want_first;
-            if self.last < want_first {
-                self.last = want_first;
-                let run = strips.start[want_first]..strips.start[want_first + 1];
-                self.members.extend_from_slice(&strips.members[run]);
-            }
         }
         while self.first > want_first {
             self.first -= 1;
@@ -183,7 +178,7 @@ impl<'a> Band<'a> {
         } else {
             at - strips.edge(self.first)
         };
-        let right = if self.last == top {
+        let right = if self.last == last_strip {
             f64::INFINITY
         } else {
             strips.edge(self.last + 1) - at
@@ -193,8 +188,7 @@ impl<'a> Band<'a> {
 
     /// Merges strip `s`'s sorted run into the sorted members.
     fn merge(&mut self, s: usize) {
-        let strips = self.strips;
-        let run = &strips.members[strips.start[s]..strips.start[s + 1]];
+        let run = self.strips.run(s);
         if run.is_empty() {
             return;
         }

@@ -9,7 +9,7 @@
 //! costs one linear pass over its band and nothing is sorted twice.
 
 /// An endpoint in a [`Band`]: where it is, which strip holds it, and its label.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub(crate) struct Member {
     /// Coordinate along the columns.
     pub(crate) y: f64,
@@ -46,34 +46,27 @@ impl Strips {
         let mut strips = Strips {
             lo,
             width,
-            members: Vec::with_capacity(points.len()),
+            members: vec![Member::default(); points.len().min(terminal.len())],
             start: vec![0; count.max(1) + 1],
         };
-        let labelled: Vec<(usize, Member)> = points
-            .iter()
-            .zip(terminal)
-            .map(|(p, &terminal)| {
-                let strip = strips.strip_of(p[0]);
-                let member = Member {
-                    y: p[1],
-                    x: p[0],
-                    strip: strip as u32,
-                    free: !terminal,
-                };
-                (strip, member)
-            })
-            .collect();
-        // Counting sort by strip, then each strip's run by y.
-        for &(strip, _) in &labelled {
+        // Counting sort by strip (the strip found twice rather than stored: no second buffer
+        // the size of the cloud), then each strip's run by y.
+        for p in points.iter().take(strips.members.len()) {
+            let strip = strips.strip_of(p[0]);
             strips.start[strip + 1] += 1;
         }
         for s in 1..strips.start.len() {
             strips.start[s] += strips.start[s - 1];
         }
         let mut fill = strips.start.clone();
-        strips.members = labelled.iter().map(|&(_, member)| member).collect();
-        for (strip, member) in labelled {
-            strips.members[fill[strip]] = member;
+        for (p, &terminal) in points.iter().zip(terminal) {
+            let strip = strips.strip_of(p[0]);
+            strips.members[fill[strip]] = Member {
+                y: p[1],
+                x: p[0],
+                strip: strip as u32,
+                free: !terminal,
+            };
             fill[strip] += 1;
         }
         for s in 0..strips.count() {

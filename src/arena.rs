@@ -5,6 +5,9 @@ use nalgebra::{Vector2, Vector3};
 
 use crate::scene::Scene;
 
+/// Half the obstacle block's lateral (y) extent, metres: the prototype's blocks are 0.5 m wide.
+pub const BLOCK_HALF_WIDTH: f64 = 0.25;
+
 /// The arena with its obstacle block in one lateral position.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Arena {
@@ -19,12 +22,18 @@ pub struct Arena {
 }
 
 impl Arena {
-    /// The arena of the authors' prototype: x ∈ [−0.5, 4.5], y ∈ [−1.75, 0.75], a 2 m × 1 m
-    /// block spanning x ∈ [0.5, 2.5] centred laterally at `block_y` (the prototype draws it
-    /// from U(−1, 0.3) each episode).
+    /// The arena of the authors' prototype: x ∈ [−0.5, 4.5], y ∈ [−1.75, 0.75], and its
+    /// obstacle, two 1.0 m × 0.5 m blocks centred at (1, `block_y`) and (2, `block_y`): one
+    /// 2 m × 0.5 m block spanning x ∈ [0.5, 2.5], y ∈ [`block_y` − 0.25, `block_y` + 0.25] (the
+    /// prototype draws `block_y` from U(−1, 0.3) each episode).
     pub fn paper(block_y: f64) -> Self {
         let bounds = [-0.5, -1.75, 4.5, 0.75];
-        let block = [0.5, block_y - 0.5, 2.5, block_y + 0.5];
+        let block = [
+            0.5,
+            block_y - BLOCK_HALF_WIDTH,
+            2.5,
+            block_y + BLOCK_HALF_WIDTH,
+        ];
         let scene = Scene::open()
             .boxed(bounds[0], bounds[1], bounds[2], bounds[3])
             .boxed(block[0], block[1], block[2], block[3]);
@@ -46,7 +55,7 @@ pub struct Flight {
 
 impl Flight {
     /// The demo's flight through the arena with the block centred at y = 0: from the start
-    /// region, down through the 1.25 m gap beside the block, up to the goal region, at 0.8 m/s.
+    /// region, down through the 1.5 m gap beside the block, up to the goal region, at 0.8 m/s.
     pub fn past_the_block() -> Self {
         Self {
             waypoints: [(-0.2, -0.4), (0.3, -1.1), (2.7, -1.1), (3.9, -0.3)]
@@ -101,6 +110,15 @@ mod tests {
             assert!(arena.scene.clearance(p) > 0.2, "t = {t}: {p:?}");
             t += 0.05;
         }
+    }
+
+    #[test]
+    fn the_block_is_the_prototypes_two_one_by_half_metre_blocks() {
+        let arena = Arena::paper(-0.6);
+        assert_eq!(arena.block, [0.5, -0.85, 2.5, -0.35]);
+        // Beside the block, 0.35 m above its upper face: that face is the nearest obstacle.
+        let beside = Vector2::new(1.5, 0.0);
+        assert!((arena.scene.clearance(beside) - 0.35).abs() < 1e-12);
     }
 
     #[test]

@@ -1,9 +1,17 @@
 """PyBullet world of the paper's drone experiment: arena, obstacle block, Crazyflie, 2D LiDAR, PID.
 
 Geometry as the authors' prototype codes it (see ``src/arena.rs``): the inner area is
-x ∈ [−0.5, 4.5], y ∈ [−1.75, 0.75], z ∈ [0, 2]; a 2 m × 1 m block spans x ∈ [0.5, 2.5] with its
-centre at ``block_y`` ~ U(−1, 0.3); start x ~ U(−0.3, 0), goal x ~ U(2.7, 4.2), both with
-y ~ U(−1.6, 0.4), at 1 m altitude.
+x ∈ [−0.5, 4.5], y ∈ [−1.75, 0.75], z ∈ [0, 2] (the paper's 5 m × 2.5 m × 2 m); the obstacle is
+two 1.0 m × 0.5 m blocks centred at (1, ``block_y``) and (2, ``block_y``), i.e. one 2 m × 0.5 m
+block spanning x ∈ [0.5, 2.5], y ∈ [``block_y`` − 0.25, ``block_y`` + 0.25], 2 m high, with
+``block_y`` ~ U(−1, 0.3); start x ~ U(−0.3, 0), goal x ~ U(2.7, 4.2), both with y ~ U(−1.6, 0.4),
+at 1 m altitude. The gaps beside the block are 0.2–1.8 m wide (the narrowest, 0.2 m above a
+block at y = 0.3, passes the drone's 0.12 m diameter).
+
+Deviations from the prototype, on purpose: the observation carries the goal (the prototype's
+does not, so its agent cannot know where to go; the paper's text says the agents observe the
+relative distance to the goal) and not the prototype's 15 past actions; the goal is kept
+where it is drawn.
 
 The drone is ``urdf/cf2x.urdf``. Each physics step (240 Hz) applies the thrust kf·ω² of every rotor
 at its position and the yaw reaction torque km·(ω0² − ω1² + ω2² − ω3²) (rotors 0 and 2 clockwise),
@@ -96,7 +104,7 @@ class Arena:
     block_y: float = 0.0
     bounds: tuple[float, float, float, float] = (-0.5, -1.75, 4.5, 0.75)
     block_x: tuple[float, float] = (0.5, 2.5)
-    block_width: float = 1.0
+    block_width: float = 0.5
     height: float = 2.0
     altitude: float = 1.0
     start: np.ndarray = field(default_factory=lambda: np.array([-0.15, -0.6, 1.0]))

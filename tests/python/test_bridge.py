@@ -65,7 +65,7 @@ def test_drone_hovers_near_its_start_under_zero_action_after_a_push():
 
 
 def test_lidar_sees_the_walls_at_the_right_range_in_the_body_frame():
-    sim = DroneSim(arena(0.3))  # block at y in [-0.2, 0.8]: nothing ahead within 3 m
+    sim = DroneSim(arena(0.3))  # block at y in [0.05, 0.55]: nothing ahead within 3 m
     try:
         r = sim.scan()
         assert r.shape == (LIDAR_BEAMS,)
@@ -78,6 +78,24 @@ def test_lidar_sees_the_walls_at_the_right_range_in_the_body_frame():
         r = sim.scan()
         assert r[beam(0.0)] == pytest.approx(1.35, abs=1e-3)
         assert r[beam(math.pi / 2)] == pytest.approx(0.35, abs=1e-3)
+    finally:
+        sim.close()
+
+
+def test_the_block_is_the_prototypes_two_one_by_half_metre_blocks():
+    """The prototype's obstacle: two 1.0 m × 0.5 m blocks at (1, y_o) and (2, y_o), 2 m high."""
+    a = arena(-0.6)
+    assert a.block == pytest.approx((0.5, -0.85, 2.5, -0.35))
+    sim = DroneSim(a)
+    try:
+        above = np.array([1.5, 0.0, 1.0])  # 0.35 m above the block's upper face
+        p.resetBasePositionAndOrientation(
+            sim.drone, above.tolist(), [0, 0, 0, 1], physicsClientId=sim.client
+        )
+        r = sim.scan()
+        assert r[beam(-math.pi / 2)] == pytest.approx(0.35, abs=1e-3)  # right: the block
+        assert r[beam(math.pi / 2)] == pytest.approx(0.75, abs=1e-3)  # left: wall y = 0.75
+        assert sim.min_obstacle_distance() == pytest.approx(0.35, abs=1e-9)
     finally:
         sim.close()
 

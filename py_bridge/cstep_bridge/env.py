@@ -16,6 +16,7 @@ distance_to_goal (m), position (x, y, m).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from typing import Any, ClassVar
 
@@ -23,6 +24,7 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
+from .curriculum import partway_goal
 from .sim import CONTROL_HZ, Arena, DroneSim, DroneState
 from .world import LIDAR_BEAMS, LIDAR_RANGE, clipped_ranges
 
@@ -65,6 +67,10 @@ class EmpoweredRewardEnv(gym.Env):
             "timeout": reward_timeout,
             "node_params": node_params,
         }
+
+    goal_fraction = 1.0
+    """How far along from the start an episode's drawn goal lies (1 = the task's goal); set by
+    the training curriculum (:mod:`~cstep_bridge.curriculum`), never by evaluation."""
 
     control_period = 1.0 / CONTROL_HZ
     """Seconds per env step (the 30 Hz control rate)."""
@@ -195,6 +201,9 @@ class CStepDroneEnv(EmpoweredRewardEnv):
     def reset(self, *, seed: int | None = None, options: dict | None = None):
         super().reset(seed=seed)
         arena = self.fixed_arena or Arena.random(self.np_random)
+        if self.fixed_arena is None and self.goal_fraction < 1.0:
+            goal = partway_goal(arena.start, arena.goal, self.goal_fraction, arena.clearance)
+            arena = dataclasses.replace(arena, goal=goal)
         if options and "arena" in options:
             arena = options["arena"]
         state = self.sim.reset(arena)

@@ -51,6 +51,7 @@ import numpy as np
 import pybullet as p
 from gymnasium import spaces
 
+from .curriculum import partway_goal
 from .env import EmpoweredRewardEnv
 from .sim import CONTROL_HZ, STEPS_PER_CONTROL, DroneState
 from .world import (
@@ -344,6 +345,14 @@ class CStepMazeEnv(EmpoweredRewardEnv):
         super().reset(seed=seed)
         configs = self.sim.layout.configurations()
         config = self.fixed_config or configs[self.np_random.integers(len(configs))]
+        if self.fixed_config is None and self.goal_fraction < 1.0:
+            goal = partway_goal(
+                np.array(config.start),
+                np.array(config.goal),
+                self.goal_fraction,
+                self.sim.layout.clearance,
+            )
+            config = MazeConfig(config.start, (float(goal[0]), float(goal[1])))
         if options and "config" in options:
             config = options["config"]
         state = self.sim.reset(config)

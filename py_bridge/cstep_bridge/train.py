@@ -31,45 +31,40 @@ from typing import Any
 
 import numpy as np
 
+from . import protocol
 from .envs import ENV_NAMES, make_env
 
-# The paper's PPO settings (appendix); --timesteps defaults to its 1.5 M steps.
-PAPER = {
-    "net": [2048, 512],
-    "learning_rate": 3e-5,
-    "n_steps": 2048,
-    "batch_size": 64,
-    "n_epochs": 10,
-    "gamma": 0.99,
-    "gae_lambda": 0.95,
-    "clip_range": 0.2,
-    "use_sde": True,
-    "timesteps": 1_500_000,
-}
 # What a run's settings are: fixed when it starts, kept by --resume.
 RUN_SETTINGS = (
     "env",
     "agent",
     "c",
     "seed",
-    "net",
-    "learning_rate",
-    "n_steps",
-    "batch_size",
-    "n_epochs",
-    "gamma",
-    "gae_lambda",
-    "clip_range",
-    "use_sde",
+    "protocol",
+    *protocol.SETTING_NAMES,
     "reward_mode",
     "checkpoint_every",
 )
 # Episode fields the Monitor writes and the summaries read.
 INFO_KEYWORDS = ("success", "collision")
+# Command-line options that override one protocol setting each (option dest -> setting name).
+OVERRIDES = {
+    "net": "net",
+    "learning_rate": "learning_rate",
+    "n_steps": "n_steps",
+    "batch_size": "batch_size",
+    "n_epochs": "n_epochs",
+    "gamma": "gamma",
+    "gae_lambda": "gae_lambda",
+    "clip_range": "clip_range",
+    "use_sde": "use_sde",
+    "collision_value": "collision_value",
+}
 
 
 def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
-    """The command line; every PPO setting defaults to the paper's."""
+    """The command line; PPO settings default to the ``--protocol``'s (see
+    :mod:`~cstep_bridge.protocol`), options given override them."""
     ap = argparse.ArgumentParser(
         prog="python -m cstep_bridge.train",
         description="Train PPO on the drone or the maze, unempowered or with the C-STEP reward.",
@@ -77,23 +72,46 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     ap.add_argument("--env", choices=ENV_NAMES, default="drone")
     ap.add_argument("--agent", choices=("unempowered", "empowered"), default="empowered")
     ap.add_argument("--c", type=float, default=1.0, help="safety coefficient c > 0 (empowered)")
-    ap.add_argument("--timesteps", type=int, default=PAPER["timesteps"], help="total steps")
-    ap.add_argument("--n-envs", type=int, default=1, help="parallel environments (processes)")
+    ap.add_argument(
+        "--protocol",
+        choices=protocol.PROTOCOLS,
+        default="paper",
+        help="hyperparameter set: the paper's (default) or the sweep's choice",
+    )
+    ap.add_argument("--timesteps", type=int, help="total steps (default: the protocol's)")
+    ap.add_argument("--n-envs", type=int, help="parallel environments (default: the protocol's)")
+    ap.add_argument(
+        "--vec-env",
+        choices=("subproc", "dummy"),
+        help="envs in processes of their own (default with --n-envs > 1) or all in this one",
+    )
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--out", type=Path, required=True, help="run directory")
     ap.add_argument("--resume", action="store_true", help="continue the run in --out")
     ap.add_argument("--checkpoint-every", type=int, default=50_000, help="steps between saves")
+    ap.add_argument("--net", type=_layers, help="hidden layers, e.g. 2048,512")
+    ap.add_argument("--learning-rate", type=float)
+    ap.add_argument("--n-steps", type=int, help="per env per update")
+    ap.add_argument("--batch-size", type=int)
+    ap.add_argument("--n-epochs", type=int)
+    ap.add_argument("--gamma", type=float)
+    ap.add_argument("--gae-lambda", type=float)
+    ap.add_argument("--clip-range", type=float)
     ap.add_argument(
-        "--net", type=_layers, default=PAPER["net"], help="hidden layers, e.g. 2048,512"
+        "--no-sde", dest="use_sde", action="store_false", default=None, help="plain Gaussian noise"
     )
-    ap.add_argument("--learning-rate", type=float, default=PAPER["learning_rate"])
-    ap.add_argument("--n-steps", type=int, default=PAPER["n_steps"], help="per env per update")
-    ap.add_argument("--batch-size", type=int, default=PAPER["batch_size"])
-    ap.add_argument("--n-epochs", type=int, default=PAPER["n_epochs"])
-    ap.add_argument("--gamma", type=float, default=PAPER["gamma"])
-    ap.add_argument("--gae-lambda", type=float, default=PAPER["gae_lambda"])
-    ap.add_argument("--clip-range", type=float, default=PAPER["clip_range"])
-    ap.add_argument("--no-sde", dest="use_sde", action="store_false", help="plain Gaussian noise")
+    ap.add_argument(
+        "--collision-value",
+        choices=protocol.COLLISION_VALUES,
+        help="what a collision is worth to an empowered agent (see cstep_bridge.collision)",
+    )
+    ap.add_argument(
+        "--hyperparams",
+        nargs="+",
+        default=[],
+        metavar="KEY=VALUE",
+        help="override protocol entries, e.g. gamma=0.995 'normalize={norm_reward: true}'",
+    )
     ap.add_argument("--reward-mode", choices=("service", "topic"), default="service")
     ap.add_argument("--device", default="cpu", help="torch device (an MLP trains best on cpu)")
     ap.add_argument("--torch-threads", type=int, default=1, help="torch CPU threads")
@@ -102,8 +120,12 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     problems = [
         f"--{name.replace('_', '-')} must be > 0"
         for name in ("c", "timesteps", "n_envs", "checkpoint_every", "n_steps", "batch_size")
-        if getattr(args, name) <= 0
+        if getattr(args, name) is not None and getattr(args, name) <= 0
     ]
+    try:
+        args.overrides = dict(protocol.parse_override(h) for h in args.hyperparams)
+    except ValueError as err:
+        problems.append(f"--hyperparams: {err}")
     if problems:
         ap.error("; ".join(problems))
     return args
@@ -120,8 +142,44 @@ def _layers(text: str) -> list[int]:
 
 
 def run_settings(args: argparse.Namespace) -> dict[str, Any]:
-    """The settings stored in run.json (those that define the run, not how it is executed)."""
-    return {name: getattr(args, name) for name in RUN_SETTINGS}
+    """The settings stored in run.json (those that define the run, not how it is executed): the
+    protocol's section for the env, with ``--hyperparams`` and the single options applied."""
+    hyper = protocol.load(args.protocol, args.env)
+    for key, value in args.overrides.items():
+        if isinstance(value, dict) and isinstance(hyper.get(key), dict):
+            value = {**hyper[key], **value}  # a mapping overrides entries, not the whole
+        hyper[key] = value
+    settings = protocol.settings(hyper)
+    for option, name in OVERRIDES.items():
+        if getattr(args, option) is not None:
+            settings[name] = getattr(args, option)
+    protocol.check(settings)
+    from .curriculum import Curriculum
+    from .selection import Validation
+
+    Curriculum.from_settings(settings["curriculum"])  # raises ValueError naming what is wrong
+    Validation.from_settings(settings["validation"])
+    return {
+        "env": args.env,
+        "agent": args.agent,
+        "c": args.c,
+        "seed": args.seed,
+        "protocol": args.protocol,
+        **settings,
+        "reward_mode": args.reward_mode,
+        "checkpoint_every": args.checkpoint_every,
+    }
+
+
+def execution_defaults(args: argparse.Namespace, settings: dict[str, Any]) -> None:
+    """Fills ``--timesteps`` and ``--n-envs`` from the run's protocol where not given."""
+    hyper = protocol.load(settings.get("protocol", "paper"), settings["env"])
+    if args.timesteps is None:
+        args.timesteps = int(hyper["n_timesteps"])
+    if args.n_envs is None:
+        args.n_envs = int(hyper["n_envs"])
+    if args.vec_env is None:
+        args.vec_env = "subproc" if args.n_envs > 1 else "dummy"
 
 
 def latest_checkpoint(out: Path) -> Path | None:
@@ -141,10 +199,21 @@ def latest_checkpoint(out: Path) -> Path | None:
     return best
 
 
+def normalization_of(model_path: Path) -> Path:
+    """Where the VecNormalize statistics saved with a model file live (beside it, same stem)."""
+    name = model_path.name.replace("ppo_", "vecnormalize_").replace("model", "vecnormalize")
+    return model_path.with_name(name).with_suffix(".pkl")
+
+
 def env_factory(settings: dict[str, Any]):
     """A picklable constructor of one environment for the run (called in each worker process)."""
     empowered = settings["agent"] == "empowered"
-    kwargs = {"reward_mode": settings["reward_mode"]} if empowered else {}
+    kwargs: dict[str, Any] = {}
+    if empowered:
+        kwargs["reward_mode"] = settings["reward_mode"]
+        if settings["collision_value"] != "none":
+            kwargs["collision_value"] = settings["collision_value"]
+            kwargs["gamma"] = settings["gamma"]
 
     def build():
         return make_env(
@@ -154,20 +223,30 @@ def env_factory(settings: dict[str, Any]):
     return build
 
 
-def _callbacks(out: Path, checkpoint_every: int):
+def _callbacks(out: Path, settings: dict[str, Any]):
     from stable_baselines3.common.callbacks import BaseCallback, CallbackList
+    from stable_baselines3.common.vec_env import VecNormalize
+
+    from . import curriculum, selection
+
+    checkpoint_every = settings["checkpoint_every"]
 
     class Checkpoints(BaseCallback):
-        """Saves ``checkpoints/ppo_<steps>_steps.zip`` each time the run passes a multiple of
-        ``checkpoint_every`` steps. (SB3's CheckpointCallback counts calls since it was created,
-        so after --resume its saves would no longer fall on the run's multiples.)"""
+        """Saves ``checkpoints/ppo_<steps>_steps.zip`` (and the VecNormalize statistics beside
+        it) each time the run passes a multiple of ``checkpoint_every`` steps. (SB3's
+        CheckpointCallback counts calls since it was created, so after --resume its saves would
+        no longer fall on the run's multiples.)"""
 
         def _on_training_start(self) -> None:
             self.next_save = (self.num_timesteps // checkpoint_every + 1) * checkpoint_every
 
         def _on_step(self) -> bool:
             if self.num_timesteps >= self.next_save:
-                self.model.save(out / "checkpoints" / f"ppo_{self.num_timesteps}_steps.zip")
+                path = out / "checkpoints" / f"ppo_{self.num_timesteps}_steps.zip"
+                self.model.save(path)
+                venv = self.model.get_env()
+                if isinstance(venv, VecNormalize):
+                    venv.save(str(normalization_of(path)))
                 self.next_save = (self.num_timesteps // checkpoint_every + 1) * checkpoint_every
             return True
 
@@ -209,7 +288,45 @@ def _callbacks(out: Path, checkpoint_every: int):
             fields["steps/s"] = f"{rate:6.0f}"
             print("  ".join(f"{k} {v}" for k, v in fields.items()), flush=True)
 
-    return CallbackList([Checkpoints(), CStepLog()])
+    callbacks = [Checkpoints(), CStepLog()]
+    plan = curriculum.Curriculum.from_settings(settings["curriculum"])
+    if plan is not None:
+        callbacks.append(curriculum.make_callback(plan, out / "curriculum.json"))
+    validation = selection.Validation.from_settings(settings["validation"])
+    if validation is not None:
+        callbacks.append(selection.make_callback(settings["env"], validation, out))
+    return CallbackList(callbacks)
+
+
+def _policy_kwargs(settings: dict[str, Any]) -> dict[str, Any]:
+    import torch
+
+    net = settings["net"]
+    return {
+        "net_arch": {"pi": net, "vf": net},
+        "activation_fn": {"tanh": torch.nn.Tanh, "relu": torch.nn.ReLU}[settings["activation"]],
+        "log_std_init": settings["log_std_init"],
+        "ortho_init": settings["ortho_init"],
+    }
+
+
+def _learning_rate(settings: dict[str, Any]):
+    lr = settings["learning_rate"]
+    if settings["lr_schedule"] == "linear":
+        from stable_baselines3.common.utils import LinearSchedule
+
+        return LinearSchedule(lr, 0.0, 1.0)
+    return lr
+
+
+def load_settings(out: Path) -> dict[str, Any]:
+    """The settings of the run in ``out``; a run.json from before protocols existed reads as
+    the paper's protocol with its own entries."""
+    stored = json.loads((out / "run.json").read_text())
+    if "protocol" in stored:
+        return stored
+    base = protocol.settings(protocol.load("paper", stored["env"]))
+    return {"protocol": "paper", **base, **stored}
 
 
 def train(args: argparse.Namespace) -> Path:
@@ -217,7 +334,7 @@ def train(args: argparse.Namespace) -> Path:
     import torch
     from stable_baselines3 import PPO
     from stable_baselines3.common.env_util import make_vec_env
-    from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv
+    from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv, VecNormalize
 
     from .plots import training_curve
 
@@ -227,7 +344,7 @@ def train(args: argparse.Namespace) -> Path:
     if args.resume:
         if not settings_path.exists():
             raise SystemExit(f"--resume: {out} holds no run (no run.json); start one without it")
-        settings = json.loads(settings_path.read_text())
+        settings = load_settings(out)
         resume_from = latest_checkpoint(out)
         if resume_from is None:
             raise SystemExit(f"--resume: {out} has no checkpoint or model.zip to continue from")
@@ -236,9 +353,13 @@ def train(args: argparse.Namespace) -> Path:
             raise SystemExit(
                 f"{out} already holds a run: pass --resume to continue it, or choose another --out"
             )
-        settings = run_settings(args)
+        try:
+            settings = run_settings(args)
+        except ValueError as err:
+            raise SystemExit(f"settings: {err}") from err
         out.mkdir(parents=True, exist_ok=True)
         settings_path.write_text(json.dumps(settings, indent=2) + "\n")
+    execution_defaults(args, settings)
 
     (out / "checkpoints").mkdir(exist_ok=True)
     torch.set_num_threads(args.torch_threads)
@@ -248,26 +369,39 @@ def train(args: argparse.Namespace) -> Path:
         seed=settings["seed"],
         monitor_dir=str(out / "monitor"),
         monitor_kwargs={"info_keywords": INFO_KEYWORDS, "override_existing": not args.resume},
-        vec_env_cls=SubprocVecEnv if args.n_envs > 1 else DummyVecEnv,
+        vec_env_cls=SubprocVecEnv if args.vec_env == "subproc" else DummyVecEnv,
     )
+    if settings["norm_obs"] or settings["norm_reward"]:
+        stats = normalization_of(resume_from) if resume_from is not None else None
+        if stats is not None and stats.exists():
+            vec_env = VecNormalize.load(str(stats), vec_env)
+        else:
+            vec_env = VecNormalize(
+                vec_env,
+                norm_obs=settings["norm_obs"],
+                norm_reward=settings["norm_reward"],
+                gamma=settings["gamma"],
+            )
     try:
         if resume_from is not None:
             model = PPO.load(resume_from, env=vec_env, device=args.device)
             print(f"resuming {out} from {resume_from.name} at step {model.num_timesteps}")
         else:
-            net = settings["net"]
             model = PPO(
                 "MlpPolicy",
                 vec_env,
-                learning_rate=settings["learning_rate"],
+                learning_rate=_learning_rate(settings),
                 n_steps=settings["n_steps"],
                 batch_size=settings["batch_size"],
                 n_epochs=settings["n_epochs"],
                 gamma=settings["gamma"],
                 gae_lambda=settings["gae_lambda"],
                 clip_range=settings["clip_range"],
+                ent_coef=settings["ent_coef"],
+                max_grad_norm=settings["max_grad_norm"],
                 use_sde=settings["use_sde"],
-                policy_kwargs={"net_arch": {"pi": net, "vf": net}},
+                sde_sample_freq=settings["sde_sample_freq"],
+                policy_kwargs=_policy_kwargs(settings),
                 tensorboard_log=str(out / "tb"),
                 seed=settings["seed"],
                 device=args.device,
@@ -277,17 +411,22 @@ def train(args: argparse.Namespace) -> Path:
         label = f"{settings['env']} {settings['agent']}"
         if settings["agent"] == "empowered":
             label += f" c={settings['c']}"
-        print(f"training {label}: {remaining} steps to {args.timesteps}, {args.n_envs} env(s)")
+        print(
+            f"training {label} ({settings['protocol']} protocol): {remaining} steps to "
+            f"{args.timesteps}, {args.n_envs} env(s)"
+        )
         if remaining > 0:
             model.learn(
                 total_timesteps=remaining,
-                callback=_callbacks(out, settings["checkpoint_every"]),
+                callback=_callbacks(out, settings),
                 tb_log_name="ppo",
                 reset_num_timesteps=False,
                 progress_bar=args.progress,
             )
         final = out / "model.zip"
         model.save(final)
+        if isinstance(vec_env, VecNormalize):
+            vec_env.save(str(normalization_of(final)))
     finally:
         vec_env.close()
     training_curve(out / "monitor", out / "training.png", title=label)

@@ -1,0 +1,116 @@
+"""A curriculum over the start–goal distance: goals first drawn part of the way from the start,
+then further, until they are where the task puts them.
+
+Exploration is what fails on the full task: a random policy rarely gets near a goal 3–4.5 m away
+behind the block. Under the curriculum an episode's goal is moved to ``start + f·(goal − start)``
+(``f`` the current level; nudged further along where that point is within ``clearance`` of an
+obstacle), and the level moves up once the agent succeeds at the current one. Only the training
+episodes' goal distance changes: the task, the reward function and the evaluation set stay as they
+are, and the last level is always 1 (the task's own goals), so the rest of training runs on them.
+
+Configured by a protocol's ``curriculum`` entry (see :mod:`~cstep_bridge.protocol`)::
+
+    curriculum:
+      levels: [0.25, 0.5, 0.75, 1.0]   # fractions f, last = 1
+      promote_at: 0.6                  # success rate over ...
+      window: 60                       # ... the last this many episodes at the level
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+CLEARANCE = 0.3
+"""A curriculum goal is at least this far (m) from every obstacle (walls, block)."""
+NUDGE = 0.05
+"""Step (in f) by which a goal too close to an obstacle is moved on toward the task's goal."""
+
+
+@dataclass(frozen=True)
+class Curriculum:
+    """The levels and when to move up; see the module docstring."""
+
+    levels: tuple[float, ...]
+    promote_at: float
+    window: int
+
+    @classmethod
+    def from_settings(cls, value: dict[str, Any] | None) -> Curriculum | None:
+        """The curriculum of a run's ``curriculum`` setting; None when it has none."""
+        if not value:
+            return None
+        unknown = set(value) - {"levels", "promote_at", "window"}
+        if unknown:
+            raise ValueError(f"curriculum: unknown keys {sorted(unknown)}")
+        levels = tuple(float(v) for v in value.get("levels", (0.25, 0.5, 0.75, 1.0)))
+        if not levels or levels[-1] != 1.0 or any(not 0 < f <= 1 for f in levels):
+            raise ValueError(f"curriculum levels must lie in (0, 1] and end at 1, not {levels}")
+        if list(levels) != sorted(levels):
+            raise ValueError(f"curriculum levels must increase, not {levels}")
+        promote_at = float(value.get("promote_at", 0.6))
+        window = int(value.get("window", 60))
+        if not 0 < promote_at <= 1 or window <= 0:
+            raise ValueError("curriculum: promote_at must be in (0, 1] and window > 0")
+        return cls(levels, promote_at, window)
+
+
+def partway_goal(start: np.ndarray, goal: np.ndarray, fraction: float, clearance) -> np.ndarray:
+    """The point ``fraction`` of the way from ``start`` to ``goal``, moved on toward ``goal`` in
+    steps of :data:`NUDGE` while ``clearance(point)`` is below :data:`CLEARANCE`."""
+    start, goal = np.asarray(start, dtype=float), np.asarray(goal, dtype=float)
+    f = float(fraction)
+    while f < 1.0:
+        point = start + f * (goal - start)
+        if clearance(point[:2]) >= CLEARANCE:
+            return point
+        f += NUDGE
+    return goal.copy()
+
+
+def make_callback(curriculum: Curriculum, state: Path):
+    """An SB3 callback that sets the envs' ``goal_fraction`` and moves up the levels; the level
+    reached is kept in the JSON file ``state``, so a resumed run goes on from it."""
+    from stable_baselines3.common.callbacks import BaseCallback
+
+    start_level = json.loads(state.read_text())["level"] if state.exists() else 0
+
+    class GoalCurriculum(BaseCallback):
+        """Moves the training envs' goals out as the agent succeeds (see the module docstring)."""
+
+        def _on_training_start(self) -> None:
+            self.level = start_level
+            self.outcomes: list[bool] = []
+            self._apply()
+
+        def _apply(self) -> None:
+            self.training_env.set_attr("goal_fraction", curriculum.levels[self.level])
+            self.outcomes = []
+
+        def _on_step(self) -> bool:
+            for info in self.locals["infos"]:
+                if "episode" in info:  # the Monitor marks an episode's last step
+                    self.outcomes.append(bool(info["success"] and not info["collision"]))
+            last = self.level == len(curriculum.levels) - 1
+            recent = self.outcomes[-curriculum.window :]
+            if (
+                not last
+                and len(recent) == curriculum.window
+                and np.mean(recent) >= curriculum.promote_at
+            ):
+                self.level += 1
+                print(
+                    f"curriculum: level {self.level} (goal fraction "
+                    f"{curriculum.levels[self.level]:g}) at step {self.num_timesteps}",
+                    flush=True,
+                )
+                self._apply()
+                state.write_text(json.dumps({"level": self.level, "step": self.num_timesteps}))
+            self.logger.record("cstep/goal_fraction", curriculum.levels[self.level])
+            return True
+
+    return GoalCurriculum()

@@ -3,8 +3,8 @@ then further, until they are where the task puts them.
 
 Exploration is what fails on the full task: a random policy rarely gets near a goal 3–4.5 m away
 behind the block. Under the curriculum an episode's goal is moved to ``start + f·(goal − start)``
-(``f`` the current level; nudged further along where that point is within ``clearance`` of an
-obstacle), and the level moves up once the agent succeeds at the current one. Only the training
+(``f`` the current level; moved along the line to the nearest point clear of obstacles where
+it is not), and the level moves up once the agent succeeds at the current one. Only the training
 episodes' goal distance changes: the task, the reward function and the evaluation set stay as they
 are, and the last level is always 1 (the task's own goals), so the rest of training runs on them.
 
@@ -60,15 +60,20 @@ class Curriculum:
 
 
 def partway_goal(start: np.ndarray, goal: np.ndarray, fraction: float, clearance) -> np.ndarray:
-    """The point ``fraction`` of the way from ``start`` to ``goal``, moved on toward ``goal`` in
-    steps of :data:`NUDGE` while ``clearance(point)`` is below :data:`CLEARANCE`."""
+    """The point ``fraction`` of the way from ``start`` to ``goal`` or, where that point is
+    within :data:`CLEARANCE` of an obstacle (``clearance(xy)`` below it), the nearest point along
+    the line, in steps of :data:`NUDGE`, that is not: nearer the start (in front of the block)
+    or nearer the goal (past it). The goal itself when none is."""
     start, goal = np.asarray(start, dtype=float), np.asarray(goal, dtype=float)
-    f = float(fraction)
-    while f < 1.0:
-        point = start + f * (goal - start)
-        if clearance(point[:2]) >= CLEARANCE:
-            return point
-        f += NUDGE
+    if fraction >= 1.0:
+        return goal.copy()
+    steps = int(np.ceil(1.0 / NUDGE))
+    for k in range(steps + 1):
+        for f in (fraction - k * NUDGE, fraction + k * NUDGE):
+            if 0.0 < f < 1.0:
+                point = start + f * (goal - start)
+                if clearance(point[:2]) >= CLEARANCE:
+                    return point
     return goal.copy()
 
 
@@ -88,7 +93,10 @@ def make_callback(curriculum: Curriculum, state: Path):
             self._apply()
 
         def _apply(self) -> None:
-            self.training_env.set_attr("goal_fraction", curriculum.levels[self.level])
+            # On the env itself: VecEnv.set_attr would set it on the outermost wrapper (Monitor).
+            self.training_env.env_method(
+                "set_wrapper_attr", "goal_fraction", curriculum.levels[self.level]
+            )
             self.outcomes = []
 
         def _on_step(self) -> bool:

@@ -79,12 +79,15 @@ def distinct_labels(agents: list[Agent]) -> None:
                 a.label = f"{a.label} (seed {a.seed})"
 
 
-def configurations(env: str) -> list[Any]:
-    """The environment's fixed evaluation set, in order."""
+def configurations(env: str, eval_set: Path | None = None) -> list[Any]:
+    """The environment's evaluation set, in order: the drone's committed 100 arenas (or those of
+    ``eval_set``, a JSON file in the same format), the maze's 18 start × goal combinations."""
     if env == "drone":
-        from .eval_set import load
+        from .eval_set import DEFAULT_PATH, load
 
-        return load()
+        return load(eval_set or DEFAULT_PATH)
+    if eval_set is not None:
+        raise ValueError("--eval-set: only the drone takes an evaluation set from a file")
     from .maze import configurations as maze_configurations
 
     return maze_configurations()
@@ -95,52 +98,75 @@ def reset_options(env: str, config: Any) -> dict[str, Any]:
     return {"arena": config} if env == "drone" else {"config": config}
 
 
-def fly(model_path: Path, env_name: str, indices: list[int]) -> list[metrics.Episode]:
-    """Flies configurations ``indices`` with the deterministic policy (in a worker process)."""
-    import torch
-    from stable_baselines3 import PPO
-
-    torch.set_num_threads(1)
-    model = PPO.load(model_path, device="cpu")
-    configs = configurations(env_name)
-    env = make_env(env_name, empowered=False)
+def fly_episodes(
+    model, env, env_name: str, configs: list[Any], ids: list[int], normalize_obs=None
+) -> list[metrics.Episode]:
+    """Flies each of ``configs`` (numbered ``ids``) in ``env`` with ``model``'s deterministic
+    policy; ``normalize_obs`` maps raw observations to the policy's input, if it needs that."""
     radius = env.unwrapped.robot_radius
     dt = env.unwrapped.control_period
     route_taken = None
     if env_name == "maze":
         from .maze import route_taken
     episodes = []
-    try:
-        for i in indices:
-            obs, info = env.reset(seed=i, options=reset_options(env_name, configs[i]))
-            xy, gap, done = [], [], False
-            while not done:
-                action, _ = model.predict(obs, deterministic=True)
-                obs, _, terminated, truncated, info = env.step(action)
-                xy.append(info["position"])
-                gap.append(info["min_obstacle_distance"] - radius)
-                done = terminated or truncated
-            episode = metrics.Episode(
-                dt=dt,
-                xy=np.array(xy),
-                gap=np.array(gap),
-                success=bool(info["success"] and not info["collision"]),
-                collision=bool(info["collision"]),
-                config=i,
-            )
-            if route_taken is not None:
-                episode.extra["route"] = route_taken(episode.xy)
-            episodes.append(episode)
-    finally:
-        env.close()
+    for i, config in zip(ids, configs, strict=True):
+        obs, info = env.reset(seed=i, options=reset_options(env_name, config))
+        xy, gap, done = [], [], False
+        while not done:
+            x = obs if normalize_obs is None else normalize_obs(obs)
+            action, _ = model.predict(x, deterministic=True)
+            obs, _, terminated, truncated, info = env.step(action)
+            xy.append(info["position"])
+            gap.append(info["min_obstacle_distance"] - radius)
+            done = terminated or truncated
+        episode = metrics.Episode(
+            dt=dt,
+            xy=np.array(xy),
+            gap=np.array(gap),
+            success=bool(info["success"] and not info["collision"]),
+            collision=bool(info["collision"]),
+            config=i,
+        )
+        if route_taken is not None:
+            episode.extra["route"] = route_taken(episode.xy)
+        episodes.append(episode)
     return episodes
 
 
-def evaluate_agent(agent: Agent, env: str, indices: list[int], jobs: int) -> list[metrics.Episode]:
+def fly(
+    model_path: Path, env_name: str, indices: list[int], eval_set: Path | None = None
+) -> list[metrics.Episode]:
+    """Flies configurations ``indices`` with the deterministic policy (in a worker process)."""
+    import torch
+    from stable_baselines3 import PPO
+
+    from .normalization import observation_normalizer
+
+    torch.set_num_threads(1)
+    model = PPO.load(model_path, device="cpu")
+    configs = configurations(env_name, eval_set)
+    env = make_env(env_name, empowered=False)
+    try:
+        return fly_episodes(
+            model,
+            env,
+            env_name,
+            [configs[i] for i in indices],
+            indices,
+            observation_normalizer(model_path),
+        )
+    finally:
+        env.close()
+
+
+def evaluate_agent(
+    agent: Agent, env: str, indices: list[int], jobs: int, eval_set: Path | None = None
+) -> list[metrics.Episode]:
     """All of ``indices`` for one agent, split over ``jobs`` worker processes."""
     chunks = [c.tolist() for c in np.array_split(indices, jobs) if len(c)]
-    with ProcessPoolExecutor(len(chunks), mp_context=get_context("spawn")) as pool:
-        parts = pool.map(fly, [agent.model] * len(chunks), [env] * len(chunks), chunks)
+    k = len(chunks)
+    with ProcessPoolExecutor(k, mp_context=get_context("spawn")) as pool:
+        parts = pool.map(fly, [agent.model] * k, [env] * k, chunks, [eval_set] * k)
         episodes = [e for part in parts for e in part]
     return sorted(episodes, key=lambda e: e.config)
 
@@ -195,12 +221,19 @@ def markdown(
         lines += [
             "## Success rate and time to clear the obstacle",
             "",
-            "| Agent | Success rate | Avg. clear time (s) | Collision rate | Cleared |",
+            (
+                "Success: reached the goal (within the env's success radius) without a collision. "
+                "Cleared: got past the block without a collision, the most plausible reading of "
+                "the paper's success rate (its prototype neither observes nor stops at the goal); "
+                "compare the paper's numbers with that column."
+            ),
+            "",
+            "| Agent | Success rate | Avg. clear time (s) | Collision rate | Cleared rate |",
             "|---|---:|---:|---:|---:|",
         ]
         lines += [
             f"| {label} | {s.success_rate:.0%} | {_fmt(s.clear_time, '.2f')} | "
-            f"{s.collision_rate:.0%} | {s.cleared}/{s.episodes} |"
+            f"{s.collision_rate:.0%} | {s.cleared_rate:.0%} |"
             for label, s in summaries.items()
         ]
     if env == "maze":
@@ -244,10 +277,13 @@ def markdown(
 
 
 def panels(
-    env: str, agents: list[Agent], results: dict[str, list[metrics.Episode]]
+    env: str,
+    agents: list[Agent],
+    results: dict[str, list[metrics.Episode]],
+    eval_set: Path | None = None,
 ) -> list[MapPanel]:
     """The maps to draw paths on: six drone configurations, or the maze once per agent."""
-    configs = configurations(env)
+    configs = configurations(env, eval_set)
     if env == "drone":
         shown = sorted({e.config for e in next(iter(results.values()))})[:DRONE_PANELS]
         out = []
@@ -293,6 +329,12 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     )
     ap.add_argument("--label", action="append", help="a name per --model, in the same order")
     ap.add_argument("--env", choices=ENV_NAMES, help="default: from the models' run.json")
+    ap.add_argument(
+        "--eval-set",
+        type=Path,
+        help="drone: a JSON evaluation set in the format of data/drone_eval_set.json "
+        "(default: that file, the committed 100 arenas)",
+    )
     ap.add_argument("--episodes", type=int, help="only the first N configurations")
     ap.add_argument("--jobs", type=int, default=1, help="worker processes per agent")
     ap.add_argument("--out", type=Path, required=True, help="directory for results and plots")
@@ -317,16 +359,19 @@ def main(argv: list[str] | None = None) -> int:
         distinct_labels(agents)
     if len({a.label for a in agents}) != len(agents):
         raise SystemExit("two agents share a label: pass --label for each --model")
-    n = len(configurations(env))
+    try:
+        n = len(configurations(env, args.eval_set))
+    except ValueError as err:
+        raise SystemExit(str(err)) from err
     indices = list(range(min(n, args.episodes or n)))
     results, summaries = {}, {}
     for agent in agents:
         print(f"{agent.label}: {len(indices)} episodes on {env} ({agent.model})", flush=True)
-        results[agent.label] = evaluate_agent(agent, env, indices, args.jobs)
+        results[agent.label] = evaluate_agent(agent, env, indices, args.jobs, args.eval_set)
         s = summaries[agent.label] = metrics.summarize(results[agent.label], clear_x(env))
         print(
             f"  success {s.success_rate:.0%}, collisions {s.collision_rate:.0%}, "
-            f"clear time {_fmt(s.clear_time, '.2f', ' s')}",
+            f"cleared {_fmt(s.cleared_rate, '.0%')}, clear time {_fmt(s.clear_time, '.2f', ' s')}",
             flush=True,
         )
     out: Path = args.out
@@ -361,7 +406,9 @@ def main(argv: list[str] | None = None) -> int:
             indent=1,
         )
     )
-    paths_figure(panels(env, agents, results), [a.label for a in agents], out / "paths.png")
+    paths_figure(
+        panels(env, agents, results, args.eval_set), [a.label for a in agents], out / "paths.png"
+    )
     fine = {
         label: [sum(e.time_within(d) for e in eps) / len(eps) for d in FINE_THRESHOLDS]
         for label, eps in results.items()

@@ -7,6 +7,10 @@ unempowered agent). The authors' prototype has no code for them; these are our d
 - **success**: the agent came within the env's success radius of the goal and never collided.
 - **clear time**: the first time the agent's centre is past ``clear_x`` (the block's far face);
   averaged over the episodes that got there (None when none did).
+- **cleared rate**: the share of episodes that got past ``clear_x`` and never collided. The paper
+  never defines its "success"; its prototype neither observes the goal nor ends an episode there,
+  so its success rates (82 … 99 %) are most plausibly this measure. ``success_rate`` keeps the
+  task's meaning (reached the goal); compare the paper's numbers with ``cleared_rate``.
 - **time within d**: the seconds during which the gap between the robot's surface and the nearest
   obstacle (walls or block; centre distance minus the robot's radius) is below d, counting each
   control step whose state is that close as one step of ``dt`` (the start state is not counted).
@@ -58,7 +62,8 @@ class Summary:
     success_rate: float
     collision_rate: float
     clear_time: float | None  # mean over the episodes that cleared; None if none did
-    cleared: int
+    cleared: int  # episodes that got past the clear line (collided or not)
+    cleared_rate: float | None  # share that got past it and never collided; None without a line
     time_within: dict[float, float]  # threshold -> mean seconds per episode
     share_within: dict[float, float]  # threshold -> fraction of all flown time
 
@@ -79,6 +84,11 @@ def summarize(
         collision_rate=sum(e.collision for e in episodes) / n,
         clear_time=float(np.mean(clears)) if clears else None,
         cleared=len(clears),
+        cleared_rate=(
+            None
+            if clear_x is None
+            else sum(e.clear_time(clear_x) is not None and not e.collision for e in episodes) / n
+        ),
         time_within={d: sum(e.time_within(d) for e in episodes) / n for d in thresholds},
         share_within={
             d: (sum(e.time_within(d) for e in episodes) / flown if flown > 0 else 0.0)

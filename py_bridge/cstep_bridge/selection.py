@@ -73,29 +73,16 @@ def validation_set(env: str, size: int) -> list[Any]:
     return out
 
 
-def fly_validation(model, env, configs: list[Any], normalize_obs=None) -> dict[str, float]:
-    """Success, collision rates and mean episode length of ``model``'s deterministic policy on
-    ``configs`` in ``env``; ``normalize_obs`` maps raw observations to the policy's input."""
-    from .evaluate import reset_options
+def fly_validation(model, env, env_name: str, configs: list[Any], normalize_obs=None):
+    """Success and collision rates and mean episode length (steps) of ``model``'s deterministic
+    policy on ``configs`` in ``env``."""
+    from .evaluate import fly_episodes
 
-    name = "drone" if hasattr(env.unwrapped, "fixed_arena") else "maze"
-    successes, collisions, lengths = 0, 0, []
-    for i, config in enumerate(configs):
-        obs, info = env.reset(seed=i, options=reset_options(name, config))
-        done, steps = False, 0
-        while not done:
-            x = normalize_obs(obs) if normalize_obs else obs
-            action, _ = model.predict(x, deterministic=True)
-            obs, _, terminated, truncated, info = env.step(action)
-            done, steps = terminated or truncated, steps + 1
-        successes += bool(info["success"] and not info["collision"])
-        collisions += bool(info["collision"])
-        lengths.append(steps)
-    n = len(configs)
+    episodes = fly_episodes(model, env, env_name, configs, list(range(len(configs))), normalize_obs)
     return {
-        "success_rate": successes / n,
-        "collision_rate": collisions / n,
-        "mean_length": float(np.mean(lengths)),
+        "success_rate": float(np.mean([e.success for e in episodes])),
+        "collision_rate": float(np.mean([e.collision for e in episodes])),
+        "mean_length": float(np.mean([len(e.gap) for e in episodes])),
     }
 
 
@@ -105,6 +92,7 @@ def make_callback(env_name: str, validation: Validation, out: Path):
     from stable_baselines3.common.vec_env import VecNormalize
 
     from .envs import make_env
+    from .normalization import stats_path
 
     log = out / "validation.csv"
 
@@ -127,7 +115,7 @@ def make_callback(env_name: str, validation: Validation, out: Path):
             norm = venv.normalize_obs if isinstance(venv, VecNormalize) and venv.norm_obs else None
             env = make_env(env_name, empowered=False)
             try:
-                result = fly_validation(self.model, env, self.configs, norm)
+                result = fly_validation(self.model, env, env_name, self.configs, norm)
             finally:
                 env.close()
             key = (result["success_rate"], -result["collision_rate"])
@@ -135,8 +123,8 @@ def make_callback(env_name: str, validation: Validation, out: Path):
             if improved:
                 self.best = key
                 self.model.save(out / "best_model.zip")
-                if norm is not None:
-                    venv.save(str(out / "best_vecnormalize.pkl"))
+                if isinstance(venv, VecNormalize):
+                    venv.save(str(stats_path(out / "best_model.zip")))
             new = not log.exists()
             with log.open("a", newline="") as f:
                 w = csv.writer(f)

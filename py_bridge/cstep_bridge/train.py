@@ -33,6 +33,7 @@ import numpy as np
 
 from . import protocol
 from .envs import ENV_NAMES, make_env
+from .normalization import stats_path
 
 # What a run's settings are: fixed when it starts, kept by --resume.
 RUN_SETTINGS = (
@@ -199,12 +200,6 @@ def latest_checkpoint(out: Path) -> Path | None:
     return best
 
 
-def normalization_of(model_path: Path) -> Path:
-    """Where the VecNormalize statistics saved with a model file live (beside it, same stem)."""
-    name = model_path.name.replace("ppo_", "vecnormalize_").replace("model", "vecnormalize")
-    return model_path.with_name(name).with_suffix(".pkl")
-
-
 def env_factory(settings: dict[str, Any]):
     """A picklable constructor of one environment for the run (called in each worker process)."""
     empowered = settings["agent"] == "empowered"
@@ -246,7 +241,7 @@ def _callbacks(out: Path, settings: dict[str, Any]):
                 self.model.save(path)
                 venv = self.model.get_env()
                 if isinstance(venv, VecNormalize):
-                    venv.save(str(normalization_of(path)))
+                    venv.save(str(stats_path(path)))
                 self.next_save = (self.num_timesteps // checkpoint_every + 1) * checkpoint_every
             return True
 
@@ -372,7 +367,7 @@ def train(args: argparse.Namespace) -> Path:
         vec_env_cls=SubprocVecEnv if args.vec_env == "subproc" else DummyVecEnv,
     )
     if settings["norm_obs"] or settings["norm_reward"]:
-        stats = normalization_of(resume_from) if resume_from is not None else None
+        stats = stats_path(resume_from) if resume_from is not None else None
         if stats is not None and stats.exists():
             vec_env = VecNormalize.load(str(stats), vec_env)
         else:
@@ -426,7 +421,7 @@ def train(args: argparse.Namespace) -> Path:
         final = out / "model.zip"
         model.save(final)
         if isinstance(vec_env, VecNormalize):
-            vec_env.save(str(normalization_of(final)))
+            vec_env.save(str(stats_path(final)))
     finally:
         vec_env.close()
     training_curve(out / "monitor", out / "training.png", title=label)

@@ -41,12 +41,18 @@ def test_summary_averages_over_episodes_and_clear_time_over_those_that_cleared()
     assert s.success_rate == pytest.approx(2 / 3)
     assert s.collision_rate == pytest.approx(1 / 3)
     assert s.cleared == 2
+    assert s.cleared_rate == pytest.approx(2 / 3)
     assert s.clear_time == pytest.approx(0.25)
     # Within 0.1 m: 1 + 2 + 2 steps of 0.1 s over three episodes; 5 of 9 flown steps.
     assert s.time_within[0.1] == pytest.approx(0.5 / 3)
     assert s.share_within[0.1] == pytest.approx(5 / 9)
     assert s.time_within[0.5] == pytest.approx(0.5 / 3)
     assert metrics.summarize(eps).clear_time is None  # no line: no clear time
+    assert metrics.summarize(eps).cleared_rate is None
+    # Past the line and then into a wall: cleared, but not without a collision.
+    crashed_after = episode([0, 3, 4.5], [0.5, 0.5, 0.0], success=False, collision=True)
+    s = metrics.summarize([crashed_after], clear_x=2.5)
+    assert s.cleared == 1 and s.cleared_rate == 0.0
     with pytest.raises(ValueError, match="no episodes"):
         metrics.summarize([])
 

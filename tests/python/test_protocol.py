@@ -1,0 +1,159 @@
+"""Training protocols, the goal curriculum and validation-based model selection, against real
+stable-baselines3 models and real PyBullet envs (no node: unempowered)."""
+
+import json
+
+import numpy as np
+import pytest
+from cstep_bridge import curriculum, eval_set, protocol, selection
+from cstep_bridge.envs import make_env
+from cstep_bridge.maze import LAYOUT
+from cstep_bridge.sim import Arena
+from cstep_bridge.train import parse_args, run_settings
+from stable_baselines3 import PPO
+from stable_baselines3.common.env_util import make_vec_env
+
+
+def test_the_paper_protocol_is_the_papers_appendix():
+    for env in ("drone", "maze"):
+        s = protocol.settings(protocol.load("paper", env))
+        assert s["net"] == [2048, 512]
+        assert s["learning_rate"] == 3e-5 and s["lr_schedule"] == "constant"
+        assert (s["n_steps"], s["batch_size"], s["n_epochs"]) == (2048, 64, 10)
+        assert (s["gamma"], s["gae_lambda"], s["clip_range"]) == (0.99, 0.95, 0.2)
+        assert s["use_sde"] is True
+        assert s["collision_value"] == "none"
+        assert not s["norm_obs"] and not s["norm_reward"]
+        assert protocol.load("paper", env)["n_timesteps"] == 1_500_000
+
+
+@pytest.mark.parametrize("name", protocol.PROTOCOLS)
+@pytest.mark.parametrize("env", ["drone", "maze"])
+def test_every_protocol_builds_a_ppo_model_with_its_settings(name, env, tmp_path):
+    args = parse_args(["--env", env, "--agent", "unempowered", "--protocol", name, "--out", "x"])
+    settings = run_settings(args)
+    assert settings["protocol"] == name
+    from cstep_bridge.train import _learning_rate, _policy_kwargs
+
+    venv = make_vec_env(lambda: make_env(env, empowered=False), n_envs=1)
+    try:
+        model = PPO(
+            "MlpPolicy",
+            venv,
+            learning_rate=_learning_rate(settings),
+            n_steps=settings["n_steps"],
+            batch_size=settings["batch_size"],
+            gamma=settings["gamma"],
+            use_sde=settings["use_sde"],
+            policy_kwargs=_policy_kwargs(settings),
+            device="cpu",
+        )
+        net = model.policy.mlp_extractor.policy_net
+        layers = [m.out_features for m in net if hasattr(m, "out_features")]
+        assert layers == settings["net"]
+        assert model.gamma == settings["gamma"]
+        assert model.policy.log_std.detach().numpy() == pytest.approx(settings["log_std_init"])
+    finally:
+        venv.close()
+
+
+def test_hyperparams_override_one_entry_and_mappings_merge():
+    args = parse_args(
+        [
+            "--protocol",
+            "tuned",
+            "--out",
+            "x",
+            "--gamma",
+            "0.97",
+            "--hyperparams",
+            "n_epochs=3",
+            "policy_kwargs={log_std_init: -2}",
+        ]
+    )
+    s = run_settings(args)
+    tuned = protocol.settings(protocol.load("tuned", "drone"))
+    assert s["gamma"] == 0.97 and s["n_epochs"] == 3
+    assert s["log_std_init"] == -2 and s["net"] == tuned["net"]  # net_arch kept
+
+
+@pytest.mark.parametrize(
+    "bad, message",
+    [
+        ("gama=0.9", "unknown hyperparameter 'gama'"),
+        ("gamma", "expected KEY=VALUE"),
+    ],
+)
+def test_a_bad_hyperparameter_is_refused_with_its_name(bad, message, capsys):
+    with pytest.raises(SystemExit):
+        parse_args(["--out", "x", "--hyperparams", bad])
+    assert message in capsys.readouterr().err
+
+
+def test_bad_settings_are_named():
+    args = parse_args(["--out", "x", "--hyperparams", "collision_value=sometimes"])
+    with pytest.raises(ValueError, match="collision_value"):
+        run_settings(args)
+    args = parse_args(["--out", "x", "--hyperparams", "curriculum={levels: [0.5]}"])
+    with pytest.raises(ValueError, match="end at 1"):
+        run_settings(args)
+
+
+def test_partway_goals_keep_clear_of_the_block():
+    a = Arena(block_y=-0.6, start=np.array([-0.1, -0.6, 1.0]), goal=np.array([3.5, -0.6, 1.0]))
+    # A quarter of the way is x = 0.8, inside the block: moved back to 0.3 m before its face.
+    g = curriculum.partway_goal(a.start, a.goal, 0.25, a.clearance)
+    assert a.clearance(g[:2]) >= curriculum.CLEARANCE
+    assert g[0] <= 0.5 - curriculum.CLEARANCE + 1e-9 and g[1] == pytest.approx(-0.6)
+    # Three quarters (x = 2.6) is nearer the far face: moved on past it.
+    g = curriculum.partway_goal(a.start, a.goal, 0.75, a.clearance)
+    assert g[0] >= 2.5 + curriculum.CLEARANCE - 1e-9
+    clear = Arena(block_y=0.3, start=a.start, goal=a.goal)  # the straight line passes below
+    g = curriculum.partway_goal(clear.start, clear.goal, 0.25, clear.clearance)
+    assert g == pytest.approx(clear.start + 0.25 * (clear.goal - clear.start))
+    assert curriculum.partway_goal(a.start, a.goal, 1.0, a.clearance) == pytest.approx(a.goal)
+
+
+def test_the_curriculum_callback_moves_the_training_envs_goals(tmp_path):
+    """The level reaches the env itself through its Monitor wrapper, and the goals it draws."""
+    venv = make_vec_env(lambda: make_env("drone", empowered=False), n_envs=2, seed=3)
+    plan = curriculum.Curriculum((0.3, 1.0), promote_at=1.0, window=5)
+    try:
+        model = PPO("MlpPolicy", venv, n_steps=16, batch_size=16, n_epochs=1, device="cpu")
+        model.learn(32, callback=curriculum.make_callback(plan, tmp_path / "c.json"))
+        inner = venv.envs[0].unwrapped
+        assert inner.goal_fraction == 0.3
+        obs, _ = venv.envs[0].reset(seed=11)
+        arena = Arena.random(np.random.default_rng(11))  # what reset drew before moving it
+        goal = inner.sim.arena.goal
+        assert np.linalg.norm(goal - arena.start) < np.linalg.norm(arena.goal - arena.start)
+        assert obs[:3] == pytest.approx(goal - inner.sim.state().position, abs=1e-5)
+    finally:
+        venv.close()
+
+
+def test_validation_sets_are_disjoint_from_the_evaluation_sets():
+    drone = selection.validation_set("drone", 40)
+    committed = {a.block_y for a in eval_set.load()}
+    assert len(drone) == 40 and not committed & {a.block_y for a in drone}
+    maze = selection.validation_set("maze", 36)
+    centres = {(c.start, c.goal) for c in LAYOUT.configurations()}
+    assert len(maze) == 36 and not centres & {(c.start, c.goal) for c in maze}
+    for c in maze:  # within its cells, clear of the walls
+        assert LAYOUT.clearance(c.start) > 0.1 and LAYOUT.clearance(c.goal) > 0.1
+
+
+def test_validation_keeps_the_best_model_and_logs_each_round(tmp_path):
+    venv = make_vec_env(lambda: make_env("maze", empowered=False), n_envs=1, seed=0)
+    try:
+        model = PPO("MlpPolicy", venv, n_steps=32, batch_size=32, n_epochs=1, device="cpu")
+        cb = selection.make_callback("maze", selection.Validation(every=32, episodes=2), tmp_path)
+        model.learn(64, callback=cb)
+    finally:
+        venv.close()
+    rows = (tmp_path / "validation.csv").read_text().splitlines()
+    assert rows[0] == "steps,success_rate,collision_rate,mean_length,best"
+    assert [r.split(",")[0] for r in rows[1:]] == ["32", "64"]
+    assert rows[1].endswith(",1")  # the first validation is the best so far
+    assert PPO.load(tmp_path / "best_model.zip", device="cpu").num_timesteps in (32, 64)
+    json.dumps(selection.Validation(1, 1).__dict__)  # plain data, fit for run.json

@@ -19,13 +19,14 @@ from typing import Any
 
 import yaml
 
+from .collision import COLLISION_VALUES
+
 HYPERPARAMS = Path(__file__).resolve().parent / "hyperparams"
 PROTOCOLS = ("paper", "tuned")
 """``paper``: the paper's settings (its appendix). ``tuned``: the sweep's choice
 (``docs/results/protocol.md`` records how it was found)."""
 
 ACTIVATIONS = ("tanh", "relu")
-COLLISION_VALUES = ("none", "floor")
 
 # Every key a protocol section may hold, and what it becomes in the run settings.
 _DEFAULTS: dict[str, Any] = {

@@ -2,17 +2,25 @@
 
     python -m cstep_bridge.train --env drone --agent empowered --c 1 --timesteps 100000 --out runs/x
 
-The defaults are the paper's PPO settings: two hidden layers of 2048 and 512 units (policy and value
-each), n_steps 2048, batch 64, γ 0.99, GAE λ 0.95, clip 0.2, learning rate 3e-5, gSDE, 10 epochs,
-and the paper's 1.5 M timesteps. An empowered agent's environments each start a private
-``cstep node`` on their own ROS domain (localhost only), so ``--n-envs`` parallel environments never
-hear each other.
+Hyperparameters come from a protocol (:mod:`~cstep_bridge.protocol`, files in ``hyperparams/``):
+``--protocol paper`` (the default) is the paper's PPO settings — two hidden layers of 2048 and 512
+units (policy and value each), n_steps 2048, batch 64, γ 0.99, GAE λ 0.95, clip 0.2, learning rate
+3e-5, gSDE, 10 epochs, 1.5 M timesteps; ``--protocol tuned`` is the sweep's choice, under which
+agents learn the task (``docs/results/protocol.md``). Single options (``--gamma``, ``--net``, ...)
+and ``--hyperparams KEY=VALUE`` override entries. Every agent of a comparison trains with the same
+protocol: the levers in it (normalisation, curriculum, model selection, ...) apply to all alike.
+An empowered agent's environments each start a private ``cstep node`` on their own ROS domain
+(localhost only), so ``--n-envs`` parallel environments never hear each other.
 
 The run directory ``--out`` holds:
 
 - ``run.json``: the settings, written when the run starts; ``--resume`` continues with them
   (only ``--timesteps``, ``--n-envs`` and how it runs may change).
-- ``checkpoints/ppo_<steps>_steps.zip`` every ``--checkpoint-every`` steps, and ``model.zip`` at the end.
+- ``checkpoints/ppo_<steps>_steps.zip`` every ``--checkpoint-every`` steps, and ``model.zip`` at the end
+  (with ``vecnormalize*.pkl`` beside each when the protocol normalises, see
+  :mod:`~cstep_bridge.normalization`).
+- ``best_model.zip`` and ``validation.csv`` when the protocol validates
+  (:mod:`~cstep_bridge.selection`); ``curriculum.json`` when it has a curriculum.
 - ``tb/``: TensorBoard logs (``tensorboard --logdir DIR/tb``): SB3's losses and episode rewards,
   plus ``cstep/`` success and collision rates, mean empowerment and mean obstacle distance.
 - ``monitor/``: one CSV per environment with every episode's reward, length, success and collision.

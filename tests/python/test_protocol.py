@@ -157,3 +157,15 @@ def test_validation_keeps_the_best_model_and_logs_each_round(tmp_path):
     assert rows[1].endswith(",1")  # the first validation is the best so far
     assert PPO.load(tmp_path / "best_model.zip", device="cpu").num_timesteps in (32, 64)
     json.dumps(selection.Validation(1, 1).__dict__)  # plain data, fit for run.json
+
+
+def test_the_floor_held_for_the_remaining_steps_is_its_discounted_sum():
+    from cstep_bridge.collision import held_return
+
+    assert held_return(-2.0, 1, 0.99) == pytest.approx(-2.0)  # the last step: itself only
+    assert held_return(-2.0, 3, 0.5) == pytest.approx(-2.0 * (1 + 0.5 + 0.25))
+    assert held_return(-2.0, 4, 1.0) == pytest.approx(-8.0)
+    long = held_return(-1.0, 10_000, 0.99)
+    assert long == pytest.approx(-100.0, rel=1e-6)  # n → ∞: r / (1 − γ)
+    with pytest.raises(ValueError, match="steps"):
+        held_return(-1.0, 0, 0.99)

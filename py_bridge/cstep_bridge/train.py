@@ -322,6 +322,32 @@ def _learning_rate(settings: dict[str, Any]):
     return lr
 
 
+def build_model(settings: dict[str, Any], venv, device: str = "cpu", tensorboard_log=None):
+    """A new PPO model with a run's settings on ``venv``."""
+    from stable_baselines3 import PPO
+
+    return PPO(
+        "MlpPolicy",
+        venv,
+        learning_rate=_learning_rate(settings),
+        n_steps=settings["n_steps"],
+        batch_size=settings["batch_size"],
+        n_epochs=settings["n_epochs"],
+        gamma=settings["gamma"],
+        gae_lambda=settings["gae_lambda"],
+        clip_range=settings["clip_range"],
+        ent_coef=settings["ent_coef"],
+        max_grad_norm=settings["max_grad_norm"],
+        use_sde=settings["use_sde"],
+        sde_sample_freq=settings["sde_sample_freq"],
+        policy_kwargs=_policy_kwargs(settings),
+        tensorboard_log=None if tensorboard_log is None else str(tensorboard_log),
+        seed=settings["seed"],
+        device=device,
+        verbose=0,
+    )
+
+
 def load_settings(out: Path) -> dict[str, Any]:
     """The settings of the run in ``out``; a run.json from before protocols existed reads as
     the paper's protocol with its own entries."""
@@ -390,26 +416,7 @@ def train(args: argparse.Namespace) -> Path:
             model = PPO.load(resume_from, env=vec_env, device=args.device)
             print(f"resuming {out} from {resume_from.name} at step {model.num_timesteps}")
         else:
-            model = PPO(
-                "MlpPolicy",
-                vec_env,
-                learning_rate=_learning_rate(settings),
-                n_steps=settings["n_steps"],
-                batch_size=settings["batch_size"],
-                n_epochs=settings["n_epochs"],
-                gamma=settings["gamma"],
-                gae_lambda=settings["gae_lambda"],
-                clip_range=settings["clip_range"],
-                ent_coef=settings["ent_coef"],
-                max_grad_norm=settings["max_grad_norm"],
-                use_sde=settings["use_sde"],
-                sde_sample_freq=settings["sde_sample_freq"],
-                policy_kwargs=_policy_kwargs(settings),
-                tensorboard_log=str(out / "tb"),
-                seed=settings["seed"],
-                device=args.device,
-                verbose=0,
-            )
+            model = build_model(settings, vec_env, args.device, out / "tb")
         remaining = args.timesteps - model.num_timesteps
         label = f"{settings['env']} {settings['agent']}"
         if settings["agent"] == "empowered":

@@ -9,7 +9,7 @@ from cstep_bridge import curriculum, eval_set, protocol, selection
 from cstep_bridge.envs import make_env
 from cstep_bridge.maze import LAYOUT
 from cstep_bridge.sim import Arena
-from cstep_bridge.train import parse_args, run_settings
+from cstep_bridge.train import build_model, parse_args, run_settings
 from stable_baselines3 import PPO
 from stable_baselines3.common.env_util import make_vec_env
 
@@ -33,25 +33,17 @@ def test_every_protocol_builds_a_ppo_model_with_its_settings(name, env, tmp_path
     args = parse_args(["--env", env, "--agent", "unempowered", "--protocol", name, "--out", "x"])
     settings = run_settings(args)
     assert settings["protocol"] == name
-    from cstep_bridge.train import _learning_rate, _policy_kwargs
-
     venv = make_vec_env(lambda: make_env(env, empowered=False), n_envs=1)
     try:
-        model = PPO(
-            "MlpPolicy",
-            venv,
-            learning_rate=_learning_rate(settings),
-            n_steps=settings["n_steps"],
-            batch_size=settings["batch_size"],
-            gamma=settings["gamma"],
-            use_sde=settings["use_sde"],
-            policy_kwargs=_policy_kwargs(settings),
-            device="cpu",
-        )
+        model = build_model(settings, venv)
         net = model.policy.mlp_extractor.policy_net
         layers = [m.out_features for m in net if hasattr(m, "out_features")]
         assert layers == settings["net"]
-        assert model.gamma == settings["gamma"]
+        assert (model.gamma, model.n_steps, model.use_sde) == (
+            settings["gamma"],
+            settings["n_steps"],
+            settings["use_sde"],
+        )
         assert model.policy.log_std.detach().numpy() == pytest.approx(settings["log_std_init"])
     finally:
         venv.close()

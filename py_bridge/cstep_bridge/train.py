@@ -254,7 +254,11 @@ def _callbacks(out: Path, settings: dict[str, Any]):
             return True
 
     class CStepLog(BaseCallback):
-        """Logs success/collision rates, empowerment and obstacle distance for each rollout."""
+        """Logs success/collision rates, empowerment and obstacle distance for each rollout, and
+        the wall-clock minutes since this (part of the) run started."""
+
+        def _on_training_start(self) -> None:
+            self.training_started = time.monotonic()
 
         def _on_rollout_start(self) -> None:
             self.empowerment: list[float] = []
@@ -289,6 +293,7 @@ def _callbacks(out: Path, settings: dict[str, Any]):
             self.logger.record("cstep/min_obstacle_distance_mean", np.mean(self.distance))
             rate = (self.num_timesteps - self.start_steps) / (time.monotonic() - self.started)
             fields["steps/s"] = f"{rate:6.0f}"
+            fields["min"] = f"{(time.monotonic() - self.training_started) / 60:6.1f}"
             print("  ".join(f"{k} {v}" for k, v in fields.items()), flush=True)
 
     callbacks = [Checkpoints(), CStepLog()]

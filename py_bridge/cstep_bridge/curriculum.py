@@ -3,16 +3,18 @@ then further, until they are where the task puts them.
 
 Exploration is what fails on the full task: a random policy rarely gets near a goal 3–4.5 m away
 behind the block. Under the curriculum an episode's goal is moved to ``start + f·(goal − start)``
-(``f`` the current level; moved along the line to the nearest point clear of obstacles where
-it is not), and the level moves up once the agent succeeds at the current one. Only the training
-episodes' goal distance changes: the task, the reward function and the evaluation set stay as they
-are, and the last level is always 1 (the task's own goals), so the rest of training runs on them.
+(moved along that line to the nearest point clear of obstacles where it is not), with ``f`` drawn
+uniformly from [0, level]: goals anywhere up to the current level's share of the way, so the
+easier ones stay in the mix and each level adds only the goals just beyond the last. The level
+moves up once the agent succeeds often enough at the current one. Only the training episodes'
+goal distance changes: the task, the reward function and the evaluation set stay as they are, and
+the last level is always 1 (the task's own goals, not drawn), so the rest of training runs on them.
 
 Configured by a protocol's ``curriculum`` entry (see :mod:`~cstep_bridge.protocol`)::
 
     curriculum:
       levels: [0.25, 0.5, 0.75, 1.0]   # fractions f, last = 1
-      promote_at: 0.6                  # success rate over ...
+      promote_at: 0.7                  # success rate over ...
       window: 60                       # ... the last this many episodes at the level
 """
 
@@ -52,7 +54,7 @@ class Curriculum:
             raise ValueError(f"curriculum levels must lie in (0, 1] and end at 1, not {levels}")
         if list(levels) != sorted(levels):
             raise ValueError(f"curriculum levels must increase, not {levels}")
-        promote_at = float(value.get("promote_at", 0.6))
+        promote_at = float(value.get("promote_at", 0.7))
         window = int(value.get("window", 60))
         if not 0 < promote_at <= 1 or window <= 0:
             raise ValueError("curriculum: promote_at must be in (0, 1] and window > 0")
@@ -75,6 +77,12 @@ def partway_goal(start: np.ndarray, goal: np.ndarray, fraction: float, clearance
                 if clearance(point[:2]) >= CLEARANCE:
                     return point
     return goal.copy()
+
+
+def training_fraction(level: float, rng: np.random.Generator) -> float:
+    """How far along an episode's goal lies at curriculum ``level``: U(0, level), or 1 (the
+    task's goal) at level 1."""
+    return 1.0 if level >= 1.0 else float(rng.uniform(0.0, level))
 
 
 def make_callback(curriculum: Curriculum, state: Path):

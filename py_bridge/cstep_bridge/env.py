@@ -24,7 +24,7 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from .curriculum import partway_goal
+from .curriculum import partway_goal, training_fraction
 from .sim import CONTROL_HZ, Arena, DroneSim, DroneState
 from .world import LIDAR_BEAMS, LIDAR_RANGE, clipped_ranges
 
@@ -69,8 +69,9 @@ class EmpoweredRewardEnv(gym.Env):
         }
 
     goal_fraction = 1.0
-    """How far along from the start an episode's drawn goal lies (1 = the task's goal); set by
-    the training curriculum (:mod:`~cstep_bridge.curriculum`), never by evaluation."""
+    """The curriculum level: drawn goals lie up to this share of the way from the start (1 = the
+    task's goals); set by the training curriculum (:mod:`~cstep_bridge.curriculum`), never by
+    evaluation."""
 
     control_period = 1.0 / CONTROL_HZ
     """Seconds per env step (the 30 Hz control rate)."""
@@ -202,7 +203,8 @@ class CStepDroneEnv(EmpoweredRewardEnv):
         super().reset(seed=seed)
         arena = self.fixed_arena or Arena.random(self.np_random)
         if self.fixed_arena is None and self.goal_fraction < 1.0:
-            goal = partway_goal(arena.start, arena.goal, self.goal_fraction, arena.clearance)
+            f = training_fraction(self.goal_fraction, self.np_random)
+            goal = partway_goal(arena.start, arena.goal, f, arena.clearance)
             arena = dataclasses.replace(arena, goal=goal)
         if options and "arena" in options:
             arena = options["arena"]

@@ -51,7 +51,7 @@ import numpy as np
 import pybullet as p
 from gymnasium import spaces
 
-from .curriculum import partway_goal
+from .curriculum import partway_goal, training_fraction
 from .env import EmpoweredRewardEnv
 from .sim import CONTROL_HZ, STEPS_PER_CONTROL, DroneState
 from .world import (
@@ -349,7 +349,7 @@ class CStepMazeEnv(EmpoweredRewardEnv):
             goal = partway_goal(
                 np.array(config.start),
                 np.array(config.goal),
-                self.goal_fraction,
+                training_fraction(self.goal_fraction, self.np_random),
                 self.sim.layout.clearance,
             )
             config = MazeConfig(config.start, (float(goal[0]), float(goal[1])))

@@ -162,3 +162,22 @@ def test_evaluation_cli_writes_the_tables_and_plots(drone_run, tmp_path):
         assert doc["summaries"][label]["episodes"] == 2
     for png in ("paths.png", "time_near_obstacle.png"):
         assert (out / png).stat().st_size > 10_000
+
+
+def test_an_exported_model_is_smaller_acts_the_same_and_evaluates(drone_run, tmp_path):
+    out = tmp_path / "models" / "unempowered-s3"
+    run("export", str(drone_run), "--which", "final", "--out", str(out))
+    assert sorted(p.name for p in out.iterdir()) == ["model.zip", "run.json"]  # no statistics
+    assert (out / "model.zip").stat().st_size < (drone_run / "model.zip").stat().st_size / 2
+    exported = json.loads((out / "run.json").read_text())
+    assert exported["exported_from"]["steps"] == 192 and exported["env"] == "drone"
+    a = PPO.load(out / "model.zip", device="cpu")
+    b = PPO.load(drone_run / "model.zip", device="cpu")
+    obs = np.random.default_rng(0).uniform(0, 3, (8, *a.observation_space.shape))
+    assert np.array_equal(
+        a.predict(obs, deterministic=True)[0], b.predict(obs, deterministic=True)[0]
+    )
+    proc = run("evaluate", "--model", str(out), "--episodes", "1", "--out", str(tmp_path / "ev"))
+    assert "unempowered: 1 episodes on drone" in proc.stdout
+    refused = run("export", str(drone_run), "--out", str(tmp_path / "x"), ok=False)  # no best
+    assert "no best_model.zip to export" in refused.stderr

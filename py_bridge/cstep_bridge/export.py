@@ -1,0 +1,74 @@
+"""Export a trained model as a small run directory to commit: ``run.json`` + ``model.zip`` with
+the policy's weights only (+ ``vecnormalize.pkl`` when the policy expects normalised inputs).
+
+    python -m cstep_bridge.export runs/drone-unempowered --which best \\
+        --out docs/results/drone/models/unempowered-pilot
+
+A training checkpoint also carries the optimiser's state (Adam's two moments per weight, twice
+the policy's size), which only continuing the training needs. The export keeps the policy and
+SB3's metadata and gives the model a fresh optimiser, so ``PPO.load`` and
+``python -m cstep_bridge.evaluate --model DIR`` read it as before, at a third of the size.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import shutil
+import sys
+from pathlib import Path
+
+from .normalization import stats_path
+
+MAX_BYTES = 5_000_000
+"""The most a committed model may weigh."""
+
+
+def source_model(run: Path, which: str) -> Path:
+    """The model file of ``run`` to export: ``best_model.zip`` (validation's choice) or
+    ``model.zip`` (the end of training)."""
+    path = run / ("best_model.zip" if which == "best" else "model.zip")
+    if not path.exists():
+        raise SystemExit(f"{run}: no {path.name} to export")
+    return path
+
+
+def export(run: Path, which: str, out: Path) -> Path:
+    """Writes ``out/run.json``, ``out/model.zip`` (policy weights only) and the normalisation
+    statistics the policy needs, if any; returns the model's path."""
+    from stable_baselines3 import PPO
+
+    src = source_model(run, which)
+    model = PPO.load(src, device="cpu")
+    model.policy.optimizer = model.policy.optimizer_class(
+        model.policy.parameters(), lr=model.policy.optimizer.param_groups[0]["lr"]
+    )  # fresh: no moments
+    out.mkdir(parents=True, exist_ok=True)
+    settings = json.loads((run / "run.json").read_text())
+    settings["exported_from"] = {"run": str(run), "model": src.name, "steps": model.num_timesteps}
+    (out / "run.json").write_text(json.dumps(settings, indent=2) + "\n")
+    target = out / "model.zip"
+    model.save(target)
+    stats = stats_path(src)
+    if stats.exists():
+        shutil.copyfile(stats, stats_path(target))
+    size = target.stat().st_size
+    if size > MAX_BYTES:
+        raise SystemExit(f"{target}: {size} bytes, more than the {MAX_BYTES} a commit may take")
+    return target
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point of ``python -m cstep_bridge.export``."""
+    ap = argparse.ArgumentParser(prog="python -m cstep_bridge.export", description=__doc__)
+    ap.add_argument("run", type=Path, help="a training run directory")
+    ap.add_argument("--which", choices=("best", "final"), default="best")
+    ap.add_argument("--out", type=Path, required=True, help="the directory to write")
+    args = ap.parse_args(argv)
+    target = export(args.run, args.which, args.out)
+    print(f"wrote {target} ({target.stat().st_size} bytes) and {args.out / 'run.json'}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -60,8 +60,6 @@ from .world import (
     PhysicsWorld,
     Rect,
     clipped_ranges,
-    create_box,
-    lidar_scan,
     rect_distance,
 )
 
@@ -218,7 +216,7 @@ class MazeSim(PhysicsWorld):
         cid = self.client
         self._restart(0.0)
         for x0, y0, x1, y1 in self.layout.walls:
-            create_box(cid, (x0, y0, 0.0), (x1, y1, WALL_HEIGHT))
+            self.add_box((x0, y0, 0.0), (x1, y1, WALL_HEIGHT))
         col = p.createCollisionShape(p.GEOM_SPHERE, radius=BALL_RADIUS, physicsClientId=cid)
         vis = p.createVisualShape(
             p.GEOM_SPHERE, radius=BALL_RADIUS, rgbaColor=(0.2, 0.8, 0.2, 1), physicsClientId=cid
@@ -257,7 +255,7 @@ class MazeSim(PhysicsWorld):
     def scan(self, state: DroneState | None = None) -> np.ndarray:
         """LiDAR ranges (m) from the ball's centre, world-frame bearings; +inf for no return."""
         s = state or self.state()
-        return lidar_scan(self.client, s.position, 0.0, BALL_RADIUS + 0.01)
+        return self.lidar(s.position, 0.0, BALL_RADIUS + 0.01)
 
     def min_obstacle_distance(self, state: DroneState | None = None) -> float:
         """Distance (m) from the ball's centre to the nearest wall, in the plane."""

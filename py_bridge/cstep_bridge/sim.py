@@ -35,8 +35,6 @@ from .world import (
     LIDAR_BEAMS,  # noqa: F401 (re-exported: the drone carries the shared LiDAR)
     PHYSICS_HZ,
     PhysicsWorld,
-    create_box,
-    lidar_scan,
     rect_distance,
 )
 
@@ -193,27 +191,45 @@ class PIDController:
         acc[2] = max(acc[2] + G, 0.2 * G)
         force = self.params.mass * acc
         z_b = force / np.linalg.norm(force)
-        x_c = np.array([1.0, 0.0, 0.0])
-        y_b = np.cross(z_b, x_c)
+        # y_b = z_b × x_c with x_c = (1, 0, 0), and x_b = y_b × z_b, written out: np.cross on
+        # 3-vectors cost more than the rest of the position loop.
+        y_b = np.array([0.0, z_b[2], -z_b[1]])
         y_b /= np.linalg.norm(y_b)
-        x_b = np.cross(y_b, z_b)
+        x_b = np.array(
+            [
+                y_b[1] * z_b[2] - y_b[2] * z_b[1],
+                y_b[2] * z_b[0] - y_b[0] * z_b[2],
+                y_b[0] * z_b[1] - y_b[1] * z_b[0],
+            ]
+        )
         self.r_des = np.column_stack([x_b, y_b, z_b])
         self.thrust = float(force @ state.rotation[:, 2])
 
     def rotor_rpm(self, state: DroneState) -> np.ndarray:
-        """Attitude loop and mixer: rotor speeds (rpm) for the current setpoint."""
-        r, rd = state.rotation, self.r_des
-        e = 0.5 * (rd.T @ r - r.T @ rd)
-        e_r = np.array([e[2, 1], e[0, 2], e[1, 0]])
-        torque = -self.k_att * e_r - self.k_rate * state.body_angular_velocity
+        """Attitude loop and mixer: rotor speeds (rpm) for the current setpoint.
+
+        Runs at every physics step, so it works on scalars: numpy's per-call cost on 3-vectors
+        was most of an env step. The attitude error is the vee of ½(R_dᵀR − RᵀR_d), and
+        RᵀR_d = (R_dᵀR)ᵀ.
+        """
+        m = self.r_des.T @ state.rotation
+        e_r = (
+            0.5 * (m[2, 1] - m[1, 2]),
+            0.5 * (m[0, 2] - m[2, 0]),
+            0.5 * (m[1, 0] - m[0, 1]),
+        )
+        w = state.body_angular_velocity
+        torque = [
+            -ka * e - kr * wi for ka, e, kr, wi in zip(self.k_att, e_r, self.k_rate, w, strict=True)
+        ]
         pr = self.params
         d = abs(pr.rotors[0][0])  # rotor offset along x and y
         a, b = torque[0] / d, torque[1] / d
         c = torque[2] * pr.kf / pr.km
         t = self.thrust
-        forces = np.array([t - a - b + c, t - a + b - c, t + a + b + c, t + a - b - c]) / 4
-        rpm = np.sqrt(np.clip(forces, 0.0, None) / pr.kf)
-        return np.minimum(rpm, pr.max_rpm)
+        forces = (t - a - b + c, t - a + b - c, t + a + b + c, t + a - b - c)
+        top = pr.max_rpm
+        return np.array([min(math.sqrt(max(f / 4, 0.0) / pr.kf), top) for f in forces])
 
 
 class DroneSim(PhysicsWorld):
@@ -246,18 +262,16 @@ class DroneSim(PhysicsWorld):
         a = self.arena
         x0, y0, x1, y1 = a.bounds
         t, h = 0.1, a.height
-        floor = create_box(cid, (x0 - t, y0 - t, -t), (x1 + t, y1 + t, 0.0), (0.8, 0.8, 0.8, 1))
-        ceiling = create_box(
-            cid, (x0 - t, y0 - t, h), (x1 + t, y1 + t, h + t), (0.8, 0.8, 0.8, 0.1)
-        )
+        floor = self.add_box((x0 - t, y0 - t, -t), (x1 + t, y1 + t, 0.0), (0.8, 0.8, 0.8, 1))
+        ceiling = self.add_box((x0 - t, y0 - t, h), (x1 + t, y1 + t, h + t), (0.8, 0.8, 0.8, 0.1))
         walls = [
-            create_box(cid, (x0 - t, y0 - t, 0), (x0, y1 + t, h)),
-            create_box(cid, (x1, y0 - t, 0), (x1 + t, y1 + t, h)),
-            create_box(cid, (x0, y0 - t, 0), (x1, y0, h)),
-            create_box(cid, (x0, y1, 0), (x1, y1 + t, h)),
+            self.add_box((x0 - t, y0 - t, 0), (x0, y1 + t, h)),
+            self.add_box((x1, y0 - t, 0), (x1 + t, y1 + t, h)),
+            self.add_box((x0, y0 - t, 0), (x1, y0, h)),
+            self.add_box((x0, y1, 0), (x1, y1 + t, h)),
         ]
         bx0, by0, bx1, by1 = a.block
-        block = create_box(cid, (bx0, by0, 0), (bx1, by1, h), (0.8, 0.3, 0.2, 1))
+        block = self.add_box((bx0, by0, 0), (bx1, by1, h), (0.8, 0.3, 0.2, 1))
         self.static = [floor, ceiling]
         self.obstacles = [*walls, block]
         self.block_id = block
@@ -289,7 +303,7 @@ class DroneSim(PhysicsWorld):
         a levelled 2D scanner at the drone's centre); +inf where nothing is within 3 m (REP 117).
         """
         s = state or self.state()
-        return lidar_scan(self.client, s.position, s.rpy[2], self.params.radius + 0.01)
+        return self.lidar(s.position, s.rpy[2], self.params.radius + 0.01)
 
     def in_collision(self) -> bool:
         """True when the drone touches anything (walls, block, floor, ceiling)."""

@@ -41,22 +41,37 @@ def create_box(
     return p.createMultiBody(0, col, vis, centre, physicsClientId=client)
 
 
-def lidar_scan(client: int, position: np.ndarray, yaw: float, r0: float) -> np.ndarray:
+_BEARINGS = LIDAR_ANGLE_MIN + LIDAR_ANGLE_INCREMENT * np.arange(LIDAR_BEAMS)
+"""The beams' bearings in the scanner's frame (rad)."""
+
+
+def lidar_scan(boxes: np.ndarray, position: np.ndarray, yaw: float, r0: float) -> np.ndarray:
     """LiDAR ranges (m) from ``position`` for bearings angle_min + i·increment relative to ``yaw``
     (a levelled 2D scanner); +inf where nothing is within 3 m (REP 117).
 
-    Rays start ``r0`` from the centre — just outside the robot's own collision shape, so they
-    never hit it — and ranges are measured from the centre.
+    ``boxes``: the world's static boxes, one row (x0, y0, z0, x1, y1, z1) each. Rays start ``r0``
+    from the centre — just outside the robot's own collision shape — and ranges are measured
+    from the centre. A ray hits the first box face it enters between ``r0`` and the range, as
+    PyBullet's ``rayTestBatch`` reports it (a ray starting inside a box does not hit that box).
+
+    Written by hand because the worlds are axis-aligned boxes, where the slab test is exact:
+    this is the same answer as ``rayTestBatch`` over the same bodies (a test compares the two on
+    random poses in both worlds) at a fraction of its cost, which was a third of an env step.
     """
-    angles = LIDAR_ANGLE_MIN + LIDAR_ANGLE_INCREMENT * np.arange(LIDAR_BEAMS) + yaw
-    dirs = np.column_stack([np.cos(angles), np.sin(angles), np.zeros(LIDAR_BEAMS)])
-    starts = position + r0 * dirs
-    ends = position + LIDAR_RANGE * dirs
-    hits = p.rayTestBatch(starts.tolist(), ends.tolist(), physicsClientId=client)
-    ranges = np.full(LIDAR_BEAMS, np.inf)
-    for i, hit in enumerate(hits):
-        if hit[0] >= 0:
-            ranges[i] = r0 + hit[2] * (LIDAR_RANGE - r0)
+    angles = _BEARINGS + yaw
+    dirs = np.stack([np.cos(angles), np.sin(angles)])[:, :, None]  # (2, beams, 1)
+    # A beam parallel to an axis crosses that axis's planes at ±∞ (never 0/0 = NaN on a face).
+    dirs[np.abs(dirs) < 1e-300] = 1e-300
+    z = position[2]
+    level = boxes[(boxes[:, 2] <= z) & (z <= boxes[:, 5])]  # boxes the scan plane cuts
+    lo = (level[:, 0:2].T - position[:2, None])[:, None, :]  # (2, 1, boxes)
+    hi = (level[:, 3:5].T - position[:2, None])[:, None, :]
+    with np.errstate(divide="ignore", over="ignore"):
+        t1, t2 = lo / dirs, hi / dirs  # (2, beams, boxes): where each slab's planes are crossed
+    enter = np.minimum(t1, t2).max(axis=0)
+    leave = np.maximum(t1, t2).min(axis=0)
+    hit = (enter <= leave) & (enter >= r0) & (enter < LIDAR_RANGE)
+    ranges = np.where(hit, enter, np.inf).min(axis=1, initial=np.inf)
     return ranges
 
 
@@ -79,9 +94,25 @@ class PhysicsWorld:
     base of the drone's and the ball's simulations."""
 
     def __init__(self, gui: bool) -> None:
-        """Connects the client; the subclass builds its world with :meth:`_restart`."""
+        """Connects the client; the subclass builds its world with :meth:`_restart` and
+        :meth:`add_box`."""
         self.client = p.connect(p.GUI if gui else p.DIRECT)
         self.physics_steps = 0
+        self.boxes = np.zeros((0, 6))
+
+    def add_box(
+        self,
+        lo: tuple[float, ...],
+        hi: tuple[float, ...],
+        rgba: tuple[float, float, float, float] = (0.6, 0.6, 0.65, 1),
+    ) -> int:
+        """A static box from ``lo`` to ``hi`` (x, y, z) in the world, seen by the LiDAR; its id."""
+        self.boxes = np.vstack([self.boxes, [*lo, *hi]])
+        return create_box(self.client, lo, hi, rgba)
+
+    def lidar(self, position: np.ndarray, yaw: float, r0: float) -> np.ndarray:
+        """The world's LiDAR ranges from ``position`` (see :func:`lidar_scan`)."""
+        return lidar_scan(self.boxes, np.asarray(position, dtype=float), yaw, r0)
 
     def _restart(self, gravity: float) -> None:
         """Empties the world and restarts the clock: gravity ``gravity`` m/s² down, 240 Hz."""
@@ -89,6 +120,7 @@ class PhysicsWorld:
         p.setGravity(0, 0, -gravity, physicsClientId=self.client)
         p.setTimeStep(1.0 / PHYSICS_HZ, physicsClientId=self.client)
         self.physics_steps = 0
+        self.boxes = np.zeros((0, 6))
 
     @property
     def time(self) -> float:

@@ -254,8 +254,10 @@ def _callbacks(out: Path, settings: dict[str, Any]):
             return True
 
     class CStepLog(BaseCallback):
-        """Logs success/collision rates, empowerment and obstacle distance for each rollout, and
-        the wall-clock minutes since this (part of the) run started."""
+        """Logs success/collision rates, empowerment, obstacle distance and the share of sampled
+        actions outside the action box (clipped: their noise tells the env nothing; a share
+        near 1 means the policy's noise has swamped its mean) for each rollout, and the
+        wall-clock minutes since this (part of the) run started."""
 
         def _on_training_start(self) -> None:
             self.training_started = time.monotonic()
@@ -263,10 +265,12 @@ def _callbacks(out: Path, settings: dict[str, Any]):
         def _on_rollout_start(self) -> None:
             self.empowerment: list[float] = []
             self.distance: list[float] = []
+            self.clipped: list[float] = []
             self.started = time.monotonic()
             self.start_steps = self.num_timesteps
 
         def _on_step(self) -> bool:
+            self.clipped.append(float(np.mean(np.abs(self.locals["actions"]) > 1.0)))
             for info in self.locals["infos"]:
                 if "empowerment" in info:
                     self.empowerment.append(info["empowerment"])
@@ -291,6 +295,8 @@ def _callbacks(out: Path, settings: dict[str, Any]):
                 self.logger.record("cstep/empowerment_mean", np.mean(self.empowerment))
                 fields["empowerment"] = f"{np.mean(self.empowerment):6.3f}"
             self.logger.record("cstep/min_obstacle_distance_mean", np.mean(self.distance))
+            self.logger.record("cstep/clipped_action_share", np.mean(self.clipped))
+            fields["clipped"] = f"{np.mean(self.clipped):4.0%}"
             rate = (self.num_timesteps - self.start_steps) / (time.monotonic() - self.started)
             fields["steps/s"] = f"{rate:6.0f}"
             fields["min"] = f"{(time.monotonic() - self.training_started) / 60:6.1f}"

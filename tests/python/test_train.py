@@ -111,6 +111,8 @@ def test_empowered_training_with_two_envs_each_with_its_own_node(tmp_path):
     # Each rollout line reports the mean empowerment the nodes returned: finite numbers.
     rollouts = [ln for ln in proc.stdout.splitlines() if ln.startswith("steps")]
     assert len(rollouts) == 1, proc.stdout  # 2 envs × 64 steps
+    clipped = float(rollouts[0].split("clipped")[1].split("%")[0])
+    assert 0 <= clipped <= 100
     empowerment = float(rollouts[0].split("empowerment")[1].split()[0])
     assert np.isfinite(empowerment)
     assert PPO.load(out / "model.zip", device="cpu").num_timesteps == 128

@@ -28,7 +28,9 @@ use ros2_client::{
 
 use super::args::RosArgs;
 use super::context::{context_from_env, resolve};
-use super::convert::{empowerment_message, laser_scan_to_scan, odometry_to_state, reward_message};
+use super::convert::{
+    empowerment_message, goal_position, laser_scan_to_scan, odometry_to_state, reward_message,
+};
 use super::markers::rollout_markers;
 use super::messages::{
     DiagnosticArray, DiagnosticStatus, EmpoweredReward, Empowerment, EvaluateRequest,
@@ -298,9 +300,9 @@ async fn serve(shared: &Arc<Shared>, ports: &Ports, node: &Node) {
     });
     let goals = ports.goal.async_stream().for_each(|received| async move {
         if let Ok((goal, _)) = received {
-            let p = goal.pose.position;
-            if [p.x, p.y, p.z].iter().all(|v| v.is_finite()) {
-                shared.latest().goal = Some(Vector3::new(p.x, p.y, p.z));
+            match goal_position(&goal.pose.position) {
+                Ok(goal) => shared.latest().goal = Some(goal),
+                Err(e) => shared.note_problem(|l| l.rejected += 1, &format!("goal_pose: {e}")),
             }
         }
     });
@@ -492,8 +494,10 @@ impl Shared {
     fn evaluate_request(&self, request: &EvaluateRequest) -> EvaluateResponse {
         let goal = request
             .has_goal
-            .then(|| Vector3::new(request.goal.x, request.goal.y, request.goal.z));
-        match self.score(&request.odom, &request.scan, goal, false) {
+            .then(|| goal_position(&request.goal))
+            .transpose()
+            .map_err(|e| e.to_string());
+        match goal.and_then(|goal| self.score(&request.odom, &request.scan, goal, false)) {
             Ok((empowerment, reward, _)) => EvaluateResponse {
                 empowerment,
                 reward,

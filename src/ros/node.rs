@@ -41,8 +41,8 @@ use crate::estimator::Estimator;
 use crate::reward::{empowered_reward, task_reward};
 
 /// Runs the node until `stop` is set: loads the parameters files and `--ros-args`, joins the
-/// DDS domain `ROS_DOMAIN_ID` (localhost only when `ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST`),
-/// and serves.
+/// DDS domain `ROS_DOMAIN_ID` as far as `ROS_AUTOMATIC_DISCOVERY_RANGE` reaches
+/// ([`super::context`]), and serves.
 pub fn run(config: &[PathBuf], ros_args: &RosArgs, stop: Arc<AtomicBool>) -> Result<(), String> {
     let node_name = ros_args.node_name.as_deref().unwrap_or(DEFAULT_NODE_NAME);
     let paths: Vec<&std::path::Path> = config
@@ -63,7 +63,7 @@ pub fn run(config: &[PathBuf], ros_args: &RosArgs, stop: Arc<AtomicBool>) -> Res
         stopping: stop,
     });
 
-    let context = context_from_env()?;
+    let context = context_from_env(true)?;
     let namespace = ros_args.namespace.as_deref().unwrap_or("/");
     let options = parameter_options(&shared, &settings);
     let mut node = context

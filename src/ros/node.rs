@@ -36,6 +36,7 @@ use super::messages::{
     DiagnosticArray, DiagnosticStatus, EmpoweredReward, Empowerment, EvaluateRequest,
     EvaluateResponse, Header, KeyValue, LaserScan, MarkerArray, Odometry, PoseStamped, Time,
 };
+use super::stamps::{Order, StampOrder};
 use crate::config::{load_all, NodeSettings, DEFAULT_NODE_NAME};
 use crate::estimator::Estimator;
 use crate::reward::{empowered_reward, task_reward};
@@ -57,6 +58,7 @@ pub fn run(config: &[PathBuf], ros_args: &RosArgs, stop: Arc<AtomicBool>) -> Res
         estimator,
         safety_coefficient: Mutex::new(settings.safety_coefficient),
         timeout: Duration::from_secs_f64(interface.input_timeout),
+        time_jump_tolerance: interface.time_jump_tolerance,
         latest: Mutex::default(),
         mailbox: Mutex::new(None),
         arrived: Condvar::new(),
@@ -113,6 +115,8 @@ struct Shared {
     estimator: Estimator,
     safety_coefficient: Mutex<f64>,
     timeout: Duration,
+    /// Seconds a scan stamp may lie behind the newest scored before it means time jumped back.
+    time_jump_tolerance: f64,
     latest: Mutex<Latest>,
     /// The newest scan not yet scored.
     mailbox: Mutex<Option<PostedScan>>,
@@ -144,8 +148,13 @@ struct Latest {
     rejected: u64,
     markers_published: u64,
     last_problem: Option<String>,
-    /// Stamp of the newest scan taken for scoring: an older one arriving later is out of order.
-    newest_stamp: Option<Time>,
+    /// The newest scored scan's stamp: an older one arriving later is late, or time jumped back.
+    order: StampOrder,
+    /// Backward time jumps seen (each reset the ordering).
+    time_jumps: u64,
+    /// The newest time jump, until a diagnostics message has said so (once, whatever other
+    /// problem or staleness comes with it).
+    time_jump: Option<String>,
 }
 
 /// The node's topics and service.
@@ -398,16 +407,12 @@ fn score_scans(shared: &Shared, outputs: &Outputs) {
             shared.note_problem(|l| l.stale += 1, "odometry is stale");
             continue;
         }
-        let out_of_order = {
-            let mut latest = shared.latest();
-            let stamp = scan.header.stamp;
-            let older = latest.newest_stamp.is_some_and(|newest| stamp < newest);
-            if !older {
-                latest.newest_stamp = Some(stamp);
-            }
-            older
-        };
-        if out_of_order {
+        let stamp = scan.header.stamp;
+        let order = shared
+            .latest()
+            .order
+            .check(stamp, shared.time_jump_tolerance);
+        if order == Order::Late {
             shared.note_problem(
                 |l| l.rejected += 1,
                 "scan stamp older than an earlier scan's",
@@ -417,6 +422,7 @@ fn score_scans(shared: &Shared, outputs: &Outputs) {
         let goal = shared.latest().goal;
         match shared.score(&odom, &scan, goal, with_markers) {
             Ok((e, r, markers)) => {
+                shared.scored(stamp, order);
                 // A full queue or a lost subscriber is not the node's failure; diagnostics show it.
                 if outputs.empowerment.publish(e).is_err() || outputs.reward.publish(r).is_err() {
                     shared.note_problem(|_| {}, "publishing a score failed");
@@ -437,6 +443,20 @@ fn score_scans(shared: &Shared, outputs: &Outputs) {
 impl Shared {
     fn latest(&self) -> std::sync::MutexGuard<'_, Latest> {
         self.latest.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    /// Records a scan stamped `stamp` as scored; if its `order` says time jumped back, counts
+    /// the jump and has the next diagnostics say so.
+    fn scored(&self, stamp: Time, order: Order) {
+        let mut latest = self.latest();
+        latest.order.scored(stamp);
+        if let Order::JumpedBack(by) = order {
+            latest.time_jumps += 1;
+            latest.time_jump = Some(format!(
+                "time jumped back {by:.3} s (scan stamped {:.3} s): stamp ordering reset",
+                stamp.seconds()
+            ));
+        }
     }
 
     fn note_problem(&self, count: impl FnOnce(&mut Latest), problem: &str) {
@@ -538,8 +558,15 @@ impl Shared {
         let odom_age = age(latest.odom.as_ref().map(|(_, t)| *t));
         let scan_age = age(latest.last_scan);
         let fresh = |a: Option<f64>| a.is_some_and(|a| a <= self.timeout.as_secs_f64());
+        let jump = latest.time_jump.take();
         let (level, message) = if !fresh(odom_age) || !fresh(scan_age) {
-            (3, "inputs stale: no score".to_owned())
+            let stale = "inputs stale: no score";
+            (
+                3,
+                jump.map_or_else(|| stale.to_owned(), |jump| format!("{stale}; {jump}")),
+            )
+        } else if let Some(jump) = jump {
+            (1, jump)
         } else if let Some(problem) = latest.last_problem.take() {
             (1, problem)
         } else if latest.last_scan_unwatched {
@@ -576,6 +603,7 @@ impl Shared {
             ("scans_unwatched", latest.unwatched.to_string()),
             ("scans_stale", latest.stale.to_string()),
             ("inputs_rejected", latest.rejected.to_string()),
+            ("time_jumps", latest.time_jumps.to_string()),
             ("markers_published", latest.markers_published.to_string()),
         ];
         DiagnosticArray {

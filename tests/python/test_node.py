@@ -194,6 +194,40 @@ def test_bad_goals_and_meaningless_odometry_on_topics_are_rejected_and_counted(r
     )
 
 
+def test_a_rejected_far_future_stamp_and_a_clock_restart_do_not_stop_scoring(rig):
+    # Issue 12, failure 1: a rejected scan stamped 2^31 - 1 made every later scan "older than
+    # an earlier scan's" until restart; so did a simulation clock restarting at 0.
+    far = corridor_scan(2**31 - 1)
+    far.angle_increment = 0.0  # malformed: rejected, so it must not count as the newest
+    rig.odom.publish(odometry())
+    rig.scan.publish(far)
+    rig.spin_for(0.3)
+    rig.feed_until(
+        lambda: any(9000 <= m.header.stamp.sec < 9100 for m in rig.empowerment),
+        "scans after the rejected far-future one are scored",
+        first_sec=9000,
+    )
+    assert not any(m.header.stamp.sec == 2**31 - 1 for m in rig.empowerment)
+
+    # The clock goes back to 0 (an episode reset): the node says so once and scores on.
+    before = int(rig.next_diagnostics()["time_jumps"])
+    seen = len(rig.diagnostics)
+    rig.feed_until(
+        lambda: sum(m.header.stamp.sec < 100 for m in rig.empowerment) >= 5,
+        "scans after the clock restarted are scored",
+        first_sec=0,
+    )
+    rig.next_diagnostics(2)
+    assert int(rig.values()["time_jumps"]) == before + 1
+    jumps = [
+        d.status[0].message
+        for d in rig.diagnostics[seen:]
+        if "time jumped back" in d.status[0].message
+    ]
+    assert len(jumps) == 1, jumps
+    assert "stamp ordering reset" in jumps[0], jumps
+
+
 def test_diagnostics_go_stale_when_inputs_stop_and_recover(rig):
     rig.feed_until(
         lambda: rig.status() is not None and rig.status().level == DiagnosticStatus.OK,
@@ -262,14 +296,20 @@ def test_bad_inputs_are_skipped_and_counted_and_the_node_keeps_scoring(rig, cste
     rig.scan.publish(corridor_scan(4005))
     rig.spin_for(0.5)
     rig.feed(3, first_sec=6000)
-    rig.feed(1, first_sec=4006)  # out of order: older than the scans just scored
+    late = corridor_scan(6001)  # out of order: 0.5 s older than the scans just scored
+    late.header.stamp.nanosec = 500_000_000
+    rig.odom.publish(odometry())
+    rig.scan.publish(late)
     rig.spin_for(0.3)
     rig.feed(10, first_sec=7000)
     rig.spin_for(1.5)
 
     assert cstep_node.poll() is None, "the node died"
     stamps = {m.header.stamp.sec for m in rig.empowerment}
-    assert {4000, 4001, 4004, 4005, 4006}.isdisjoint(stamps), "bad input was scored"
+    assert {4000, 4001, 4004, 4005}.isdisjoint(stamps), "bad input was scored"
+    assert not any(
+        m.header.stamp.sec == 6001 and m.header.stamp.nanosec for m in rig.empowerment
+    ), "a late scan was scored"
     empty_out = [m for m in rig.empowerment if m.header.stamp.sec == 4002]
     assert all(not m.valid and m.status == "scan has no beams" for m in empty_out)
     assert len(stamps & set(range(7000, 7010))) >= 9, "scoring did not resume"

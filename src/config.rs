@@ -463,12 +463,16 @@ pub struct NodeSettings {
     pub evaluate_service: String,
     /// Odometry older than this when a scan arrives is stale, seconds.
     pub input_timeout: f64,
+    /// A scan stamped more than this many seconds before the newest one scored means that time
+    /// jumped back (a simulation reset, a bag replayed): the stamp ordering is reset. Up to it,
+    /// the scan is a late delivery and skipped.
+    pub time_jump_tolerance: f64,
     /// Stamp outputs and measure ages with `/clock`.
     pub use_sim_time: bool,
 }
 
 /// The parameter names [`NodeSettings`] owns.
-pub const NODE_PARAMETERS: [&str; 9] = [
+pub const NODE_PARAMETERS: [&str; 10] = [
     "odom_topic",
     "scan_topic",
     "goal_topic",
@@ -477,6 +481,7 @@ pub const NODE_PARAMETERS: [&str; 9] = [
     "markers_topic",
     "evaluate_service",
     "input_timeout",
+    "time_jump_tolerance",
     "use_sim_time",
 ];
 
@@ -501,6 +506,8 @@ impl NodeSettings {
         let markers_topic = name("markers_topic")?;
         let evaluate_service = name("evaluate_service")?;
         let input_timeout = required("input_timeout", positive(set, "input_timeout")?)?;
+        let time_jump_tolerance =
+            required("time_jump_tolerance", positive(set, "time_jump_tolerance")?)?;
         let use_sim_time = match set.take("use_sim_time") {
             None | Some((Value::Null, _)) => false,
             Some((Value::Bool(b), _)) => b,
@@ -520,6 +527,7 @@ impl NodeSettings {
             markers_topic,
             evaluate_service,
             input_timeout,
+            time_jump_tolerance,
             use_sim_time,
         })
     }

@@ -224,6 +224,28 @@ fn malformed_inputs_fail_with_one_line_naming_file_and_field() {
         "not a valid message",
     );
 
+    // Finite in f64 but physically meaningless: rejected, naming field and value (issue 12).
+    let mut fast = odometry();
+    fast.twist.twist.linear.x = 1e39;
+    let fast = write(&dir, "fast.json", &serde_json::to_string(&fast).unwrap());
+    assert_clear_error(
+        &eval(&fast, &good_scan, &[]),
+        "fast.json",
+        "twist.twist.linear: (1e39, 0.0, 0.0)",
+    );
+    let mut huge_q = odometry();
+    huge_q.pose.pose.orientation.x = 1e155;
+    let huge_q = write(
+        &dir,
+        "huge_q.json",
+        &serde_json::to_string(&huge_q).unwrap(),
+    );
+    assert_clear_error(
+        &eval(&huge_q, &good_scan, &[]),
+        "huge_q.json",
+        "pose.pose.orientation: is not a rotation",
+    );
+
     let missing = dir.join("missing.json");
     assert_clear_error(
         &eval(&missing, &good_scan, &[]),
@@ -240,6 +262,17 @@ fn malformed_inputs_fail_with_one_line_naming_file_and_field() {
         &eval(&good_odom, &good_scan, &["--goal", "1,x"]),
         "--goal",
         "X,Y[,Z]",
+    );
+    // The goal goes through the node's checks: finite, within ±1e7 m.
+    assert_clear_error(
+        &eval(&good_odom, &good_scan, &["--goal=nan,0"]),
+        "--goal",
+        "goal: must be finite, got (NaN, 0.0, 1.0)",
+    );
+    assert_clear_error(
+        &eval(&good_odom, &good_scan, &["--goal=1,2e7,1"]),
+        "--goal",
+        "(1.0, 20000000.0, 1.0) m is beyond",
     );
 
     let urdf = write(

@@ -151,7 +151,9 @@ class CStepNode:
             ROS_AUTOMATIC_DISCOVERY_RANGE="LOCALHOST",
             ROS_DISTRO=env.get("ROS_DISTRO", "jazzy"),
         )
+        # A private node: no deprecated override, no static peers widening LOCALHOST.
         env.pop("ROS_LOCALHOST_ONLY", None)
+        env.pop("ROS_STATIC_PEERS", None)
         self.log = tempfile.NamedTemporaryFile(  # noqa: SIM115 (open for the process's life)
             "w+", prefix=f"cstep-node-{domain_id}-", suffix=".log", delete=False
         )

@@ -44,8 +44,11 @@ pub fn run(args: DemoArgs) -> Result<(), String> {
             args.duration
         ));
     }
-    // Never leave the machine; a private domain unless the user chose one.
+    // Never leave the machine (no static peers, no deprecated override); a private domain
+    // unless the user chose one.
     std::env::set_var("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST");
+    std::env::remove_var("ROS_STATIC_PEERS");
+    std::env::remove_var("ROS_LOCALHOST_ONLY");
     if std::env::var_os("ROS_DOMAIN_ID").is_none() {
         std::env::set_var("ROS_DOMAIN_ID", (1 + std::process::id() % 100).to_string());
     }
@@ -88,7 +91,7 @@ struct Scored {
 
 /// Flies the drone: publishes odometry and scans at 10 Hz and collects the node's answers.
 fn fly(args: &DemoArgs, stop: &std::sync::atomic::AtomicBool) -> Result<Vec<Scored>, String> {
-    let context = context_from_env()?;
+    let context = context_from_env(false)?;
     let mut node = context
         .new_node(
             NodeName::new("/", "cstep_demo_drone").map_err(|e| format!("{e:?}"))?,

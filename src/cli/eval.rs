@@ -9,8 +9,10 @@ use serde::Serialize;
 use cstep::config::{Settings, DEFAULT_NODE_NAME};
 use cstep::estimator::Estimator;
 use cstep::reward::{empowered_reward, task_reward};
-use cstep::ros::convert::{empowerment_message, laser_scan_to_scan, odometry_to_state};
-use cstep::ros::messages::{Empowerment, Header, LaserScan, Odometry};
+use cstep::ros::convert::{
+    empowerment_message, goal_position, laser_scan_to_scan, odometry_to_state,
+};
+use cstep::ros::messages::{Empowerment, Header, LaserScan, Odometry, Point};
 
 use super::Format;
 
@@ -125,13 +127,18 @@ fn read_json<T: DeserializeOwned>(path: &Path) -> Result<T, String> {
     serde_json::from_str(&text).map_err(|e| format!("{}: not a valid message: {e}", path.display()))
 }
 
+/// The `--goal X,Y[,Z]` position (Z defaults to the robot's height), checked as the node checks
+/// a goal.
 fn parse_goal(text: &str, default_z: f64) -> Result<Vector3<f64>, String> {
     let values: Result<Vec<f64>, _> = text.split(',').map(|v| v.trim().parse::<f64>()).collect();
-    match values.as_deref() {
-        Ok([x, y]) if x.is_finite() && y.is_finite() => Ok(Vector3::new(*x, *y, default_z)),
-        Ok([x, y, z]) if [x, y, z].iter().all(|v| v.is_finite()) => Ok(Vector3::new(*x, *y, *z)),
-        _ => Err(format!(
-            "--goal: expected two or three finite numbers X,Y[,Z], got \"{text}\""
-        )),
-    }
+    let goal = match values.as_deref() {
+        Ok(&[x, y]) => Point { x, y, z: default_z },
+        Ok(&[x, y, z]) => Point { x, y, z },
+        _ => {
+            return Err(format!(
+                "--goal: expected two or three numbers X,Y[,Z], got \"{text}\""
+            ))
+        }
+    };
+    goal_position(&goal).map_err(|e| format!("--goal: {e}"))
 }

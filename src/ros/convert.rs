@@ -1,13 +1,22 @@
-//! Validated conversion from ROS messages to the core's inputs.
+//! Validated conversion from ROS messages to the core's inputs: the one place that decides
+//! whether a message can be scored, shared by the node's topics, `/cstep/evaluate` and
+//! `cstep eval`.
 //!
-//! A message that cannot describe a state or a scan (NaN positions, a zero quaternion, ranges
-//! that do not match the angles) is rejected with an [`InputError`] naming the field and the
-//! value; one that is well formed but says nothing useful (an empty scan) passes, and the
-//! estimator answers it with `valid = false`.
+//! A message that cannot describe a state or a scan is rejected with an [`InputError`] naming
+//! the field and the value: NaN or infinite numbers, a quaternion that is not a rotation, ranges
+//! that do not match the angles, and numbers beyond the physically meaningful bounds below
+//! (finite in `f64` but meaningless, or not even finite once the rollouts narrow them to `f32`).
+//! One that is well formed but says nothing useful (an empty scan) passes, and the estimator
+//! answers it with `valid = false`. Fields cstep does not read (covariances, `child_frame_id`,
+//! `intensities`, `time_increment`, `scan_time`, a goal's orientation) are not checked.
+//! Individual `ranges` values are never malformed: REP 117 gives every `f32` a meaning (a hit,
+//! no return, or invalid), and the occupancy reads them so.
+
+use std::f32::consts::TAU;
 
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 
-use super::messages::{EmpoweredReward, Empowerment, Header, LaserScan, Odometry};
+use super::messages::{EmpoweredReward, Empowerment, Header, LaserScan, Odometry, Point, Time};
 use crate::estimator::Estimate;
 use crate::occupancy::Scan;
 use crate::reward::Reward;
@@ -15,6 +24,31 @@ use crate::state::RobotState;
 
 /// More beams than any real 2D LiDAR produces; larger scans are rejected, not processed.
 pub const MAX_BEAMS: usize = 100_000;
+
+/// Largest |x|, |y| or |z| of a position or a goal, metres: 10 000 km from the frame's origin
+/// covers any frame a robot uses on Earth (UTM northings and ECEF coordinates included).
+pub const MAX_COORDINATE: f64 = 1e7;
+
+/// Largest speed, the length of `twist.linear`, m/s: three times the speed of sound, beyond any
+/// robot cstep models (a racing drone flies at 50 m/s).
+pub const MAX_SPEED: f64 = 1e3;
+
+/// Largest angular rate, the length of `twist.angular`, rad/s: 16 turns a second, well beyond
+/// the 35–70 rad/s at which MEMS gyroscopes saturate.
+pub const MAX_ANGULAR_RATE: f64 = 100.0;
+
+/// How far from 1 the squared norm of an orientation quaternion may be: tf2 and RViz reject
+/// transforms beyond the same tolerance (`QUATERNION_NORMALIZATION_TOLERANCE`, 10e-3). Within
+/// it the quaternion is normalised; beyond it is not a rotation but a bug upstream.
+pub const QUATERNION_NORM_TOLERANCE: f64 = 0.01;
+
+/// Largest `range_max`, metres: beyond the longest-range LiDARs made.
+pub const MAX_RANGE: f32 = 1e4;
+
+/// Largest |angle_min|, |angle_max| and |angle_increment| of a scan, radians: one turn (as an
+/// `f32`, which rounds 2π up). A scan spans at most one turn plus one increment (drivers differ
+/// on whether a full circle repeats its first bearing).
+pub const MAX_SCAN_ANGLE: f32 = TAU;
 
 /// A message field that cannot be used.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -35,15 +69,52 @@ impl InputError {
     }
 }
 
-fn finite_vector(field: &str, v: [f64; 3]) -> Result<Vector3<f64>, InputError> {
+/// A vector as `(x, y, z)`, each number as short as reads back exactly (`1e-160`, not 160
+/// digits).
+fn show(v: [f64; 3]) -> String {
+    format!("({:?}, {:?}, {:?})", v[0], v[1], v[2])
+}
+
+fn finite(field: &str, v: [f64; 3]) -> Result<Vector3<f64>, InputError> {
     if v.iter().all(|x| x.is_finite()) {
         Ok(Vector3::from(v))
     } else {
         Err(InputError::new(
             field,
-            format!("must be finite, got ({}, {}, {})", v[0], v[1], v[2]),
+            format!("must be finite, got {}", show(v)),
         ))
     }
+}
+
+/// A position: finite, every coordinate within ±[`MAX_COORDINATE`].
+fn position(field: &str, v: [f64; 3]) -> Result<Vector3<f64>, InputError> {
+    let p = finite(field, v)?;
+    if p.amax() > MAX_COORDINATE {
+        return Err(InputError::new(
+            field,
+            format!(
+                "{} m is beyond the ±{MAX_COORDINATE:e} m a position may have",
+                show(v)
+            ),
+        ));
+    }
+    Ok(p)
+}
+
+/// A rate (`unit` per second): finite, its length at most `limit`.
+fn rate(field: &str, v: [f64; 3], limit: f64, unit: &str) -> Result<Vector3<f64>, InputError> {
+    let r = finite(field, v)?;
+    // Components near f64::MAX overflow the norm to inf, which is above any limit too.
+    if r.norm() > limit {
+        return Err(InputError::new(
+            field,
+            format!(
+                "{} {unit}/s is faster than the {limit:?} {unit}/s accepted",
+                show(v)
+            ),
+        ));
+    }
+    Ok(r)
 }
 
 /// The robot state an odometry message describes, with the body-frame twist rotated into the
@@ -51,35 +122,13 @@ fn finite_vector(field: &str, v: [f64; 3]) -> Result<Vector3<f64>, InputError> {
 pub fn odometry_to_state(odom: &Odometry) -> Result<RobotState, InputError> {
     let pose = &odom.pose.pose;
     let p = pose.position;
-    let position = finite_vector("pose.pose.position", [p.x, p.y, p.z])?;
-    let q = pose.orientation;
-    let field = "pose.pose.orientation";
-    let raw = Quaternion::new(q.w, q.x, q.y, q.z);
-    if !raw.coords.iter().all(|c| c.is_finite()) {
-        return Err(InputError::new(
-            field,
-            format!(
-                "must be finite, got (x {}, y {}, z {}, w {})",
-                q.x, q.y, q.z, q.w
-            ),
-        ));
-    }
-    if raw.norm() < 1e-6 {
-        return Err(InputError::new(
-            field,
-            format!(
-                "is not a rotation: zero quaternion (x {}, y {}, z {}, w {})",
-                q.x, q.y, q.z, q.w
-            ),
-        ));
-    }
-    let attitude = UnitQuaternion::from_quaternion(raw);
+    let position = position("pose.pose.position", [p.x, p.y, p.z])?;
+    let attitude = rotation("pose.pose.orientation", pose.orientation)?;
     let t = &odom.twist.twist;
-    let linear = finite_vector("twist.twist.linear", [t.linear.x, t.linear.y, t.linear.z])?;
-    let body_rates = finite_vector(
-        "twist.twist.angular",
-        [t.angular.x, t.angular.y, t.angular.z],
-    )?;
+    let linear = [t.linear.x, t.linear.y, t.linear.z];
+    let linear = rate("twist.twist.linear", linear, MAX_SPEED, "m")?;
+    let angular = [t.angular.x, t.angular.y, t.angular.z];
+    let body_rates = rate("twist.twist.angular", angular, MAX_ANGULAR_RATE, "rad")?;
     Ok(RobotState {
         position,
         velocity: attitude * linear,
@@ -88,8 +137,64 @@ pub fn odometry_to_state(odom: &Odometry) -> Result<RobotState, InputError> {
     })
 }
 
+/// The rotation an orientation quaternion describes: finite, its squared norm within
+/// [`QUATERNION_NORM_TOLERANCE`] of 1, then normalised.
+fn rotation(
+    field: &str,
+    q: super::messages::Quaternion,
+) -> Result<UnitQuaternion<f64>, InputError> {
+    let shown = format!("(x {:?}, y {:?}, z {:?}, w {:?})", q.x, q.y, q.z, q.w);
+    let raw = Quaternion::new(q.w, q.x, q.y, q.z);
+    if !raw.coords.iter().all(|c| c.is_finite()) {
+        return Err(InputError::new(
+            field,
+            format!("must be finite, got {shown}"),
+        ));
+    }
+    // Components beyond 1e154 overflow the squared norm to inf; below 1e-154 it underflows to 0.
+    let squared = raw.norm_squared();
+    if squared == 0.0 {
+        return Err(InputError::new(
+            field,
+            format!("is not a rotation: zero quaternion {shown}"),
+        ));
+    }
+    if (squared - 1.0).abs() >= QUATERNION_NORM_TOLERANCE {
+        return Err(InputError::new(
+            field,
+            format!(
+                "is not a rotation: squared norm {squared:?}, not within \
+                 {QUATERNION_NORM_TOLERANCE} of 1 (as tf2 requires), {shown}"
+            ),
+        ));
+    }
+    Ok(UnitQuaternion::from_quaternion(raw))
+}
+
+/// The goal position of a task reward (a `/cstep/evaluate` request's `goal`, a `goal_pose`
+/// message's position, `cstep eval --goal`): finite, within ±[`MAX_COORDINATE`] like a
+/// position, so the task reward `exp(−‖p − goal‖)` is never NaN.
+pub fn goal_position(goal: &Point) -> Result<Vector3<f64>, InputError> {
+    position("goal", [goal.x, goal.y, goal.z])
+}
+
+/// A stamp whose nanoseconds lie within the second (`builtin_interfaces/Time`).
+fn stamp(field: &str, t: Time) -> Result<(), InputError> {
+    if t.nanosec >= 1_000_000_000 {
+        return Err(InputError::new(
+            field,
+            format!(
+                "nanosec {} is not within the second (sec {})",
+                t.nanosec, t.sec
+            ),
+        ));
+    }
+    Ok(())
+}
+
 /// The scan a `LaserScan` message describes.
 pub fn laser_scan_to_scan(msg: &LaserScan) -> Result<Scan, InputError> {
+    stamp("header.stamp", msg.header.stamp)?;
     for (field, value) in [
         ("angle_min", msg.angle_min),
         ("angle_max", msg.angle_max),
@@ -100,7 +205,19 @@ pub fn laser_scan_to_scan(msg: &LaserScan) -> Result<Scan, InputError> {
         if !value.is_finite() {
             return Err(InputError::new(
                 field,
-                format!("must be finite, got {value}"),
+                format!("must be finite, got {value:?}"),
+            ));
+        }
+    }
+    for (field, value) in [
+        ("angle_min", msg.angle_min),
+        ("angle_max", msg.angle_max),
+        ("angle_increment", msg.angle_increment),
+    ] {
+        if value.abs() > MAX_SCAN_ANGLE {
+            return Err(InputError::new(
+                field,
+                format!("{value:?} rad is more than one turn (±{MAX_SCAN_ANGLE:?})"),
             ));
         }
     }
@@ -114,8 +231,17 @@ pub fn laser_scan_to_scan(msg: &LaserScan) -> Result<Scan, InputError> {
         return Err(InputError::new(
             "range_max",
             format!(
-                "must exceed range_min ≥ 0, got range_min {} and range_max {}",
+                "must exceed range_min ≥ 0, got range_min {:?} and range_max {:?}",
                 msg.range_min, msg.range_max
+            ),
+        ));
+    }
+    if msg.range_max > MAX_RANGE {
+        return Err(InputError::new(
+            "range_max",
+            format!(
+                "{:?} m is beyond the {MAX_RANGE:e} m any LiDAR reaches",
+                msg.range_max
             ),
         ));
     }
@@ -129,12 +255,22 @@ pub fn laser_scan_to_scan(msg: &LaserScan) -> Result<Scan, InputError> {
         ));
     }
     let span = msg.angle_max as f64 - msg.angle_min as f64;
-    let expected = (span / msg.angle_increment as f64).round() + 1.0;
+    let increment = msg.angle_increment as f64;
+    if span.abs() > MAX_SCAN_ANGLE as f64 + increment.abs() {
+        return Err(InputError::new(
+            "angle_max",
+            format!(
+                "angle_min {:?} to angle_max {:?} spans more than one turn",
+                msg.angle_min, msg.angle_max
+            ),
+        ));
+    }
+    let expected = (span / increment).round() + 1.0;
     if !(0.0..=MAX_BEAMS as f64).contains(&expected) {
         return Err(InputError::new(
             "angle_increment",
             format!(
-                "{} does not step from angle_min {} to angle_max {}",
+                "{:?} does not step from angle_min {:?} to angle_max {:?}",
                 msg.angle_increment, msg.angle_min, msg.angle_max
             ),
         ));
@@ -144,7 +280,7 @@ pub fn laser_scan_to_scan(msg: &LaserScan) -> Result<Scan, InputError> {
         return Err(InputError::new(
             "ranges",
             format!(
-                "has {} values but angle_min {}, angle_max {}, angle_increment {} describe {} beams",
+                "has {} values but angle_min {:?}, angle_max {:?}, angle_increment {:?} describe {} beams",
                 msg.ranges.len(),
                 msg.angle_min,
                 msg.angle_max,
@@ -155,7 +291,7 @@ pub fn laser_scan_to_scan(msg: &LaserScan) -> Result<Scan, InputError> {
     }
     Ok(Scan {
         angle_min: msg.angle_min as f64,
-        angle_increment: msg.angle_increment as f64,
+        angle_increment: increment,
         range_min: msg.range_min as f64,
         range_max: msg.range_max as f64,
         ranges: msg.ranges.clone(),
@@ -240,22 +376,192 @@ mod tests {
     }
 
     #[test]
-    fn unnormalised_quaternions_are_normalised_and_zero_ones_rejected() {
+    fn nearly_unit_quaternions_are_normalised_others_rejected() {
         let mut odom = Odometry::default();
-        odom.pose.pose.orientation = QuaternionMsg {
-            x: 0.0,
-            y: 0.0,
-            z: 0.0,
-            w: 3.0,
-        };
+        // Squared norm 1.0099: within tf2's tolerance, normalised.
+        odom.pose.pose.orientation.w = 1.0099f64.sqrt();
         assert_eq!(
             odometry_to_state(&odom).unwrap().attitude,
             UnitQuaternion::identity()
         );
+        odom.pose.pose.orientation.w = 0.9901f64.sqrt();
+        assert!(odometry_to_state(&odom).is_ok());
+        // Just beyond it on either side, and far beyond: not a rotation.
+        for w in [1.0101f64.sqrt(), 0.9899f64.sqrt(), 3.0] {
+            odom.pose.pose.orientation.w = w;
+            let err = odometry_to_state(&odom).unwrap_err();
+            assert_eq!(err.field, "pose.pose.orientation");
+            assert!(err.message.contains("squared norm"), "{err}");
+        }
         odom.pose.pose.orientation.w = 0.0;
         let err = odometry_to_state(&odom).unwrap_err();
         assert_eq!(err.field, "pose.pose.orientation");
         assert!(err.message.contains("zero quaternion"));
+        // Components whose squares overflow or underflow f64 are named with their values,
+        // briefly.
+        odom.pose.pose.orientation = QuaternionMsg {
+            x: 1e155,
+            y: 0.0,
+            z: 0.0,
+            w: 1.0,
+        };
+        let err = odometry_to_state(&odom).unwrap_err();
+        assert!(err.message.contains("x 1e155"), "{err}");
+        odom.pose.pose.orientation = QuaternionMsg {
+            x: 0.0,
+            y: 0.0,
+            z: 0.0,
+            w: 1e-160,
+        };
+        let err = odometry_to_state(&odom).unwrap_err();
+        assert!(err.message.contains("w 1e-160"), "{err}");
+        assert!(!err.message.contains("00000000"), "{err}");
+    }
+
+    /// Asserts that `result` is an error naming `field` and showing `value`.
+    fn rejects<T: std::fmt::Debug>(result: Result<T, InputError>, field: &str, value: &str) {
+        let err = result.unwrap_err();
+        assert_eq!(err.field, field, "{err}");
+        assert!(err.message.contains(value), "{err} should show {value}");
+    }
+
+    #[test]
+    fn odometry_bounds_hold_on_both_sides() {
+        let with = |edit: &dyn Fn(&mut Odometry)| {
+            let mut odom = Odometry::default();
+            edit(&mut odom);
+            odometry_to_state(&odom)
+        };
+        // Positions: every coordinate within ±1e7 m.
+        assert!(with(&|o| o.pose.pose.position.x = -MAX_COORDINATE).is_ok());
+        assert!(with(&|o| o.pose.pose.position.z = MAX_COORDINATE).is_ok());
+        rejects(
+            with(&|o| o.pose.pose.position.y = 1.0000001e7),
+            "pose.pose.position",
+            "10000001.0",
+        );
+        rejects(
+            with(&|o| o.pose.pose.position.x = -1e300),
+            "pose.pose.position",
+            "-1e300",
+        );
+        // Speed: the length of the linear twist, at most 1000 m/s.
+        assert!(with(&|o| o.twist.twist.linear.x = MAX_SPEED).is_ok());
+        assert!(with(&|o| {
+            o.twist.twist.linear.x = 600.0;
+            o.twist.twist.linear.y = -800.0;
+        })
+        .is_ok());
+        rejects(
+            with(&|o| {
+                o.twist.twist.linear.x = 600.0;
+                o.twist.twist.linear.y = -800.1;
+            }),
+            "twist.twist.linear",
+            "-800.1",
+        );
+        rejects(
+            with(&|o| o.twist.twist.linear.z = 1e39),
+            "twist.twist.linear",
+            "1e39",
+        );
+        rejects(
+            with(&|o| o.twist.twist.linear.x = f64::MAX),
+            "twist.twist.linear",
+            "1.7976931348623157e308",
+        );
+        // Angular rate: the length of the angular twist, at most 100 rad/s.
+        assert!(with(&|o| o.twist.twist.angular.z = -MAX_ANGULAR_RATE).is_ok());
+        rejects(
+            with(&|o| o.twist.twist.angular.z = 100.001),
+            "twist.twist.angular",
+            "100.001",
+        );
+        rejects(
+            with(&|o| o.twist.twist.angular.x = 1e30),
+            "twist.twist.angular",
+            "1e30",
+        );
+    }
+
+    #[test]
+    fn goals_are_bounded_like_positions() {
+        let goal = |x: f64| Point { x, y: -2.0, z: 0.5 };
+        assert_eq!(
+            goal_position(&goal(1.0)).unwrap(),
+            Vector3::new(1.0, -2.0, 0.5)
+        );
+        assert!(goal_position(&goal(MAX_COORDINATE)).is_ok());
+        rejects(goal_position(&goal(-1.0000001e7)), "goal", "-10000001.0");
+        rejects(goal_position(&goal(f64::NAN)), "goal", "NaN");
+        rejects(goal_position(&goal(f64::INFINITY)), "goal", "inf");
+    }
+
+    #[test]
+    fn scan_bounds_hold_on_both_sides() {
+        let with = |edit: &dyn Fn(&mut LaserScan)| {
+            let mut s = scan(360);
+            edit(&mut s);
+            laser_scan_to_scan(&s)
+        };
+        // range_max up to 10 km.
+        assert!(with(&|s| s.range_max = MAX_RANGE).is_ok());
+        rejects(with(&|s| s.range_max = 10_001.0), "range_max", "10001.0");
+        rejects(with(&|s| s.range_max = 1e30), "range_max", "1e30");
+        // Bearings within one turn.
+        let full = |s: &mut LaserScan| {
+            s.angle_min = 0.0;
+            s.angle_max = MAX_SCAN_ANGLE;
+            s.angle_increment = MAX_SCAN_ANGLE / 360.0;
+            s.ranges = vec![1.0; 361]; // the first bearing repeated at the end
+        };
+        assert!(with(&full).is_ok());
+        rejects(
+            with(&|s| {
+                full(s);
+                s.angle_max = MAX_SCAN_ANGLE.next_up();
+            }),
+            "angle_max",
+            "6.283186",
+        );
+        rejects(with(&|s| s.angle_min = -7.0), "angle_min", "-7.0");
+        rejects(
+            with(&|s| {
+                s.angle_min = -MAX_SCAN_ANGLE;
+                s.angle_max = MAX_SCAN_ANGLE;
+                s.angle_increment = MAX_SCAN_ANGLE / 180.0;
+            }),
+            "angle_max",
+            "spans more than one turn",
+        );
+        // Increments within one turn: two beams a full turn apart pass, 1e30 apart do not.
+        let two = |s: &mut LaserScan, increment: f32| {
+            s.angle_min = -3.0;
+            s.angle_max = -3.0 + increment;
+            s.angle_increment = increment;
+            s.ranges = vec![1.0; 2];
+        };
+        assert!(with(&|s| two(s, MAX_SCAN_ANGLE)).is_ok());
+        rejects(
+            with(&|s| two(s, MAX_SCAN_ANGLE.next_up())),
+            "angle_increment",
+            "6.283186",
+        );
+        rejects(
+            with(&|s| {
+                two(s, 1.0);
+                s.angle_increment = 1e30;
+            }),
+            "angle_increment",
+            "1e30",
+        );
+        // Stamps with nanoseconds within the second.
+        assert!(with(&|s| s.header.stamp.nanosec = 999_999_999).is_ok());
+        rejects(
+            with(&|s| s.header.stamp.nanosec = 1_000_000_000),
+            "header.stamp",
+            "1000000000",
+        );
     }
 
     #[test]

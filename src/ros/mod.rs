@@ -12,4 +12,5 @@ pub mod echo;
 pub mod markers;
 pub mod messages;
 pub mod node;
+pub mod stamps;
 pub mod yaml;

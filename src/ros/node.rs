@@ -28,19 +28,22 @@ use ros2_client::{
 
 use super::args::RosArgs;
 use super::context::{context_from_env, resolve};
-use super::convert::{empowerment_message, laser_scan_to_scan, odometry_to_state, reward_message};
+use super::convert::{
+    empowerment_message, goal_position, laser_scan_to_scan, odometry_to_state, reward_message,
+};
 use super::markers::rollout_markers;
 use super::messages::{
     DiagnosticArray, DiagnosticStatus, EmpoweredReward, Empowerment, EvaluateRequest,
     EvaluateResponse, Header, KeyValue, LaserScan, MarkerArray, Odometry, PoseStamped, Time,
 };
+use super::stamps::{Order, StampOrder};
 use crate::config::{load_all, NodeSettings, DEFAULT_NODE_NAME};
 use crate::estimator::Estimator;
 use crate::reward::{empowered_reward, task_reward};
 
 /// Runs the node until `stop` is set: loads the parameters files and `--ros-args`, joins the
-/// DDS domain `ROS_DOMAIN_ID` (localhost only when `ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST`),
-/// and serves.
+/// DDS domain `ROS_DOMAIN_ID` as far as `ROS_AUTOMATIC_DISCOVERY_RANGE` reaches
+/// ([`super::context`]), and serves.
 pub fn run(config: &[PathBuf], ros_args: &RosArgs, stop: Arc<AtomicBool>) -> Result<(), String> {
     let node_name = ros_args.node_name.as_deref().unwrap_or(DEFAULT_NODE_NAME);
     let paths: Vec<&std::path::Path> = config
@@ -55,13 +58,14 @@ pub fn run(config: &[PathBuf], ros_args: &RosArgs, stop: Arc<AtomicBool>) -> Res
         estimator,
         safety_coefficient: Mutex::new(settings.safety_coefficient),
         timeout: Duration::from_secs_f64(interface.input_timeout),
+        time_jump_tolerance: interface.time_jump_tolerance,
         latest: Mutex::default(),
         mailbox: Mutex::new(None),
         arrived: Condvar::new(),
         stopping: stop,
     });
 
-    let context = context_from_env()?;
+    let context = context_from_env(true)?;
     let namespace = ros_args.namespace.as_deref().unwrap_or("/");
     let options = parameter_options(&shared, &settings);
     let mut node = context
@@ -111,6 +115,8 @@ struct Shared {
     estimator: Estimator,
     safety_coefficient: Mutex<f64>,
     timeout: Duration,
+    /// Seconds a scan stamp may lie behind the newest scored before it means time jumped back.
+    time_jump_tolerance: f64,
     latest: Mutex<Latest>,
     /// The newest scan not yet scored.
     mailbox: Mutex<Option<PostedScan>>,
@@ -142,8 +148,13 @@ struct Latest {
     rejected: u64,
     markers_published: u64,
     last_problem: Option<String>,
-    /// Stamp of the newest scan taken for scoring: an older one arriving later is out of order.
-    newest_stamp: Option<Time>,
+    /// The newest scored scan's stamp: an older one arriving later is late, or time jumped back.
+    order: StampOrder,
+    /// Backward time jumps seen (each reset the ordering).
+    time_jumps: u64,
+    /// The newest time jump, until a diagnostics message has said so (once, whatever other
+    /// problem or staleness comes with it).
+    time_jump: Option<String>,
 }
 
 /// The node's topics and service.
@@ -298,9 +309,9 @@ async fn serve(shared: &Arc<Shared>, ports: &Ports, node: &Node) {
     });
     let goals = ports.goal.async_stream().for_each(|received| async move {
         if let Ok((goal, _)) = received {
-            let p = goal.pose.position;
-            if [p.x, p.y, p.z].iter().all(|v| v.is_finite()) {
-                shared.latest().goal = Some(Vector3::new(p.x, p.y, p.z));
+            match goal_position(&goal.pose.position) {
+                Ok(goal) => shared.latest().goal = Some(goal),
+                Err(e) => shared.note_problem(|l| l.rejected += 1, &format!("goal_pose: {e}")),
             }
         }
     });
@@ -396,16 +407,12 @@ fn score_scans(shared: &Shared, outputs: &Outputs) {
             shared.note_problem(|l| l.stale += 1, "odometry is stale");
             continue;
         }
-        let out_of_order = {
-            let mut latest = shared.latest();
-            let stamp = scan.header.stamp;
-            let older = latest.newest_stamp.is_some_and(|newest| stamp < newest);
-            if !older {
-                latest.newest_stamp = Some(stamp);
-            }
-            older
-        };
-        if out_of_order {
+        let stamp = scan.header.stamp;
+        let order = shared
+            .latest()
+            .order
+            .check(stamp, shared.time_jump_tolerance);
+        if order == Order::Late {
             shared.note_problem(
                 |l| l.rejected += 1,
                 "scan stamp older than an earlier scan's",
@@ -415,6 +422,7 @@ fn score_scans(shared: &Shared, outputs: &Outputs) {
         let goal = shared.latest().goal;
         match shared.score(&odom, &scan, goal, with_markers) {
             Ok((e, r, markers)) => {
+                shared.scored(stamp, order);
                 // A full queue or a lost subscriber is not the node's failure; diagnostics show it.
                 if outputs.empowerment.publish(e).is_err() || outputs.reward.publish(r).is_err() {
                     shared.note_problem(|_| {}, "publishing a score failed");
@@ -435,6 +443,20 @@ fn score_scans(shared: &Shared, outputs: &Outputs) {
 impl Shared {
     fn latest(&self) -> std::sync::MutexGuard<'_, Latest> {
         self.latest.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
+    /// Records a scan stamped `stamp` as scored; if its `order` says time jumped back, counts
+    /// the jump and has the next diagnostics say so.
+    fn scored(&self, stamp: Time, order: Order) {
+        let mut latest = self.latest();
+        latest.order.scored(stamp);
+        if let Order::JumpedBack(by) = order {
+            latest.time_jumps += 1;
+            latest.time_jump = Some(format!(
+                "time jumped back {by:.3} s (scan stamped {:.3} s): stamp ordering reset",
+                stamp.seconds()
+            ));
+        }
     }
 
     fn note_problem(&self, count: impl FnOnce(&mut Latest), problem: &str) {
@@ -492,8 +514,10 @@ impl Shared {
     fn evaluate_request(&self, request: &EvaluateRequest) -> EvaluateResponse {
         let goal = request
             .has_goal
-            .then(|| Vector3::new(request.goal.x, request.goal.y, request.goal.z));
-        match self.score(&request.odom, &request.scan, goal, false) {
+            .then(|| goal_position(&request.goal))
+            .transpose()
+            .map_err(|e| e.to_string());
+        match goal.and_then(|goal| self.score(&request.odom, &request.scan, goal, false)) {
             Ok((empowerment, reward, _)) => EvaluateResponse {
                 empowerment,
                 reward,
@@ -534,8 +558,15 @@ impl Shared {
         let odom_age = age(latest.odom.as_ref().map(|(_, t)| *t));
         let scan_age = age(latest.last_scan);
         let fresh = |a: Option<f64>| a.is_some_and(|a| a <= self.timeout.as_secs_f64());
+        let jump = latest.time_jump.take();
         let (level, message) = if !fresh(odom_age) || !fresh(scan_age) {
-            (3, "inputs stale: no score".to_owned())
+            let stale = "inputs stale: no score";
+            (
+                3,
+                jump.map_or_else(|| stale.to_owned(), |jump| format!("{stale}; {jump}")),
+            )
+        } else if let Some(jump) = jump {
+            (1, jump)
         } else if let Some(problem) = latest.last_problem.take() {
             (1, problem)
         } else if latest.last_scan_unwatched {
@@ -572,6 +603,7 @@ impl Shared {
             ("scans_unwatched", latest.unwatched.to_string()),
             ("scans_stale", latest.stale.to_string()),
             ("inputs_rejected", latest.rejected.to_string()),
+            ("time_jumps", latest.time_jumps.to_string()),
             ("markers_published", latest.markers_published.to_string()),
         ];
         DiagnosticArray {

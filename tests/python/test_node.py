@@ -7,6 +7,7 @@ from conftest import wait_until
 from cstep_msgs.msg import EmpoweredReward
 from cstep_msgs.srv import Evaluate
 from diagnostic_msgs.msg import DiagnosticStatus
+from geometry_msgs.msg import PoseStamped
 from node_rig import RELIABLE, corridor_scan, cstep_eval, message_to_ordereddict, odometry
 from rcl_interfaces.msg import Parameter, ParameterType, ParameterValue
 from rcl_interfaces.srv import SetParameters
@@ -84,6 +85,149 @@ def test_evaluate_service_answers_identically_and_rejects_a_zero_quaternion(rig)
     assert call(request).empowerment == first.empowerment  # still serving
 
 
+def test_evaluate_service_rejects_every_bad_field_by_name_and_never_answers_nan(rig):
+    # Issue 12, failures 2 and 3: a NaN goal was answered reward NaN / valid, an infinite goal
+    # valid, a 1e39 m/s twist valid, a 1e155 quaternion "robot already in collision".
+    client = rig.node.create_client(Evaluate, "/cstep/evaluate")
+    wait_until(lambda: client.service_is_ready(), "the evaluate service", rig.executor)
+
+    def call(edit):
+        request = Evaluate.Request(odom=odometry(), scan=corridor_scan(9))
+        request.goal.x, request.goal.z, request.has_goal = 3.0, 1.0, True
+        edit(request)
+        future = client.call_async(request)
+        wait_until(future.done, "the evaluate reply", rig.executor)
+        return future.result()
+
+    def goal_x(value):
+        return lambda r: setattr(r.goal, "x", value)
+
+    def twist(part, value):
+        return lambda r: setattr(getattr(r.odom.twist.twist, part), "x", value)
+
+    cases = [
+        (goal_x(math.nan), "goal: ", "NaN"),
+        (goal_x(math.inf), "goal: ", "inf"),
+        (goal_x(-2e7), "goal: ", "-20000000.0"),
+        (twist("linear", 1e39), "odometry: twist.twist.linear: ", "1e39"),
+        (twist("linear", 1000.5), "odometry: twist.twist.linear: ", "1000.5"),
+        (twist("angular", 1e30), "odometry: twist.twist.angular: ", "1e30"),
+        (
+            lambda r: setattr(r.odom.pose.pose.orientation, "x", 1e155),
+            "odometry: pose.pose.orientation: ",
+            "1e155",
+        ),
+        (
+            lambda r: setattr(r.odom.pose.pose.position, "y", 1e8),
+            "odometry: pose.pose.position: ",
+            "100000000.0",
+        ),
+        (lambda r: setattr(r.scan, "range_max", 1e30), "scan: range_max: ", "1e30"),
+        (lambda r: setattr(r.scan, "angle_increment", 1e30), "scan: angle_increment: ", "1e30"),
+    ]
+    for edit, field, value in cases:
+        answer = call(edit)
+        e, r = answer.empowerment, answer.reward
+        assert not e.valid and not r.valid, (field, e.status)
+        assert e.status.startswith(field) and value in e.status, (field, value, e.status)
+        for number in (e.empowerment, r.reward, r.task_reward, r.empowerment_term):
+            assert math.isfinite(number), (field, e, r)
+
+    # Just inside the bounds, the same request is scored (at 999 m/s in a corridor every
+    # trajectory collides, which is a score, not a rejection).
+    inside = call(lambda r: (twist("linear", 999.0)(r), goal_x(1e7)(r)))
+    assert inside.empowerment.status == "every sampled trajectory collides", inside.empowerment
+    assert inside.reward.task_reward == 0.0  # exp(-1e7)
+    # A goal the request does not use is not read.
+    unused = call(lambda r: (goal_x(math.nan)(r), setattr(r, "has_goal", False)))
+    assert unused.empowerment.valid and unused.reward.task_reward == 1.0
+
+
+def test_bad_goals_and_meaningless_odometry_on_topics_are_rejected_and_counted(rig):
+    goals = rig.node.create_publisher(PoseStamped, "goal_pose", RELIABLE)
+    wait_until(lambda: goals.get_subscription_count() >= 1, "the goal subscription", rig.executor)
+
+    def publish_goal(x):
+        goal = PoseStamped()
+        goal.pose.position.x, goal.pose.position.z = x, 1.0
+        goals.publish(goal)
+
+    publish_goal(3.0)
+    rig.feed_until(
+        lambda: any(m.task_reward == pytest.approx(math.exp(-3.0)) for m in rig.reward),
+        "the goal reaches the reward",
+        first_sec=8000,
+    )
+    # Rejections show in diagnostics while inputs are fresh: keep feeding meanwhile.
+    before = int(rig.next_diagnostics()["inputs_rejected"])
+    seen = len(rig.diagnostics)
+    rig.feed(3, first_sec=8050)
+    publish_goal(math.nan)
+    rig.feed(3, first_sec=8053)
+    publish_goal(math.inf)
+    rig.feed(30, first_sec=8056)
+    assert int(rig.values()["inputs_rejected"]) == before + 2
+    assert any(
+        d.status[0].message.startswith("goal_pose: goal: must be finite")
+        for d in rig.diagnostics[seen:]
+    )
+    rig.reward.clear()
+    rig.feed(5, first_sec=8100)
+    rig.spin_for(0.5)
+    assert rig.reward and all(m.task_reward == pytest.approx(math.exp(-3.0)) for m in rig.reward), (
+        "a bad goal replaced the good one"
+    )
+
+    # Odometry finite in f64 but not physical: the scans taken with it are not scored.
+    seen = len(rig.diagnostics)
+    rig.feed(30, first_sec=8200, vx=1e39)
+    assert not any(8200 <= m.header.stamp.sec < 8230 for m in rig.empowerment)
+    assert any(
+        d.status[0].message.startswith("odometry: twist.twist.linear: ")
+        and "1e39" in d.status[0].message
+        for d in rig.diagnostics[seen:]
+    )
+    rig.feed_until(
+        lambda: any(m.header.stamp.sec >= 8300 for m in rig.empowerment),
+        "scoring resumes",
+        first_sec=8300,
+    )
+
+
+def test_a_rejected_far_future_stamp_and_a_clock_restart_do_not_stop_scoring(rig):
+    # Issue 12, failure 1: a rejected scan stamped 2^31 - 1 made every later scan "older than
+    # an earlier scan's" until restart; so did a simulation clock restarting at 0.
+    far = corridor_scan(2**31 - 1)
+    far.angle_increment = 0.0  # malformed: rejected, so it must not count as the newest
+    rig.odom.publish(odometry())
+    rig.scan.publish(far)
+    rig.spin_for(0.3)
+    rig.feed_until(
+        lambda: any(9000 <= m.header.stamp.sec < 9100 for m in rig.empowerment),
+        "scans after the rejected far-future one are scored",
+        first_sec=9000,
+    )
+    assert not any(m.header.stamp.sec == 2**31 - 1 for m in rig.empowerment)
+
+    # The clock goes back to 0 (an episode reset): the node says so once and scores on.
+    before = int(rig.next_diagnostics()["time_jumps"])
+    seen = len(rig.diagnostics)
+    rig.feed_until(
+        lambda: sum(m.header.stamp.sec < 100 for m in rig.empowerment) >= 5,
+        "scans after the clock restarted are scored",
+        first_sec=0,
+    )
+    rig.next_diagnostics(2)
+    assert int(rig.values()["time_jumps"]) == before + 1
+    jumps = [
+        d.status[0].message
+        for d in rig.diagnostics[seen:]
+        if "time jumped back" in d.status[0].message
+    ]
+    assert len(jumps) == 1, jumps
+    assert "stamp ordering reset" in jumps[0], jumps
+
+
 def test_diagnostics_go_stale_when_inputs_stop_and_recover(rig):
     rig.feed_until(
         lambda: rig.status() is not None and rig.status().level == DiagnosticStatus.OK,
@@ -152,14 +296,20 @@ def test_bad_inputs_are_skipped_and_counted_and_the_node_keeps_scoring(rig, cste
     rig.scan.publish(corridor_scan(4005))
     rig.spin_for(0.5)
     rig.feed(3, first_sec=6000)
-    rig.feed(1, first_sec=4006)  # out of order: older than the scans just scored
+    late = corridor_scan(6001)  # out of order: 0.5 s older than the scans just scored
+    late.header.stamp.nanosec = 500_000_000
+    rig.odom.publish(odometry())
+    rig.scan.publish(late)
     rig.spin_for(0.3)
     rig.feed(10, first_sec=7000)
     rig.spin_for(1.5)
 
     assert cstep_node.poll() is None, "the node died"
     stamps = {m.header.stamp.sec for m in rig.empowerment}
-    assert {4000, 4001, 4004, 4005, 4006}.isdisjoint(stamps), "bad input was scored"
+    assert {4000, 4001, 4004, 4005}.isdisjoint(stamps), "bad input was scored"
+    assert not any(
+        m.header.stamp.sec == 6001 and m.header.stamp.nanosec for m in rig.empowerment
+    ), "a late scan was scored"
     empty_out = [m for m in rig.empowerment if m.header.stamp.sec == 4002]
     assert all(not m.valid and m.status == "scan has no beams" for m in empty_out)
     assert len(stamps & set(range(7000, 7010))) >= 9, "scoring did not resume"

@@ -224,6 +224,8 @@ pub use dds::{
   typedesc::TypeDesc,
   with_key::{datareader::SelectByKey, WriteOptions, WriteOptionsBuilder},
 };
+// cstep patch: how far a participant reaches (ROS_AUTOMATIC_DISCOVERY_RANGE).
+pub use network::scope::DiscoveryRange;
 /// Needed to specify serialized data representation in case it is other than
 /// CDR.
 pub use serialization::RepresentationIdentifier;

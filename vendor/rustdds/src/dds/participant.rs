@@ -37,7 +37,11 @@ use crate::{
     discovery_db::DiscoveryDB,
     sedp_messages::{DiscoveredReaderData, DiscoveredTopicData, DiscoveredWriterData},
   },
-  network::{constant::*, udp_listener::UDPListener},
+  network::{
+    constant::*,
+    scope::{DiscoveryRange, PeerScope},
+    udp_listener::UDPListener,
+  },
   polling::{
     ready_channel, wake_channel, wake_channel_unbounded, LoopWaker, ReadySender, WakeReceiver,
     WakeSender, WakeUnboundedSender,
@@ -78,6 +82,10 @@ pub struct DomainParticipantBuilder {
 
   same_host_loopback: bool, // prefer loopback for same-host peers + localhost SPDP discovery peers
 
+  // cstep patch: how far discovery reaches, and the static peers.
+  discovery_range: DiscoveryRange,
+  static_peers: Vec<IpAddr>,
+
   socket_receive_buffer_size: usize,
   socket_send_buffer_size: usize,
 
@@ -93,6 +101,8 @@ impl DomainParticipantBuilder {
       domain_id,
       only_networks: None,
       same_host_loopback: true,
+      discovery_range: DiscoveryRange::Subnet,
+      static_peers: Vec::new(),
       socket_receive_buffer_size: Self::DEFAULT_SOCKET_RECEIVE_BUFFER_SIZE,
       socket_send_buffer_size: Self::DEFAULT_SOCKET_SEND_BUFFER_SIZE,
       #[cfg(feature = "security")]
@@ -126,6 +136,24 @@ impl DomainParticipantBuilder {
   /// `src/rtps/loopback_same_host_design.md`.
   pub fn same_host_loopback(mut self, enabled: bool) -> Self {
     self.same_host_loopback = enabled;
+    self
+  }
+
+  /// How far discovery reaches (default [`DiscoveryRange::Subnet`]), as ROS 2's
+  /// `ROS_AUTOMATIC_DISCOVERY_RANGE`. Unlike [`Self::with_only_networks`], this
+  /// is enforced on the sockets: in `Localhost` (without static peers) and `Off`
+  /// every socket is bound to `127.0.0.1`, no multicast socket is opened, and no
+  /// datagram is sent to or accepted from another host.
+  pub fn automatic_discovery_range(mut self, range: DiscoveryRange) -> Self {
+    self.discovery_range = range;
+    self
+  }
+
+  /// Static peers, as ROS 2's `ROS_STATIC_PEERS`: SPDP is also announced by
+  /// unicast to each one's well-known discovery ports, and in `Localhost` range
+  /// they are the other hosts this participant may talk to. Ignored in `Off`.
+  pub fn with_static_peers(mut self, peers: impl IntoIterator<Item = impl Into<IpAddr>>) -> Self {
+    self.static_peers = peers.into_iter().map(Into::into).collect();
     self
   }
 
@@ -344,6 +372,7 @@ impl DomainParticipantBuilder {
       self.socket_send_buffer_size,
       self.only_networks,
       self.same_host_loopback,
+      PeerScope::new(self.discovery_range, &self.static_peers),
       dp_waker,
       discovery_sample_sender,
     )?;
@@ -977,6 +1006,7 @@ impl DomainParticipantDisc {
     socket_send_buffer_size: usize,
     only_networks: Option<Vec<IpAddr>>,
     same_host_loopback: bool,
+    scope: PeerScope,
     dp_waker: LoopWaker,
     discovery_sample_sender: ReadySender<mio1::Token>,
   ) -> CreateResult<Self> {
@@ -994,6 +1024,7 @@ impl DomainParticipantDisc {
       socket_send_buffer_size,
       only_networks,
       same_host_loopback,
+      scope,
       dp_waker,
       discovery_sample_sender,
     )?;
@@ -1236,27 +1267,38 @@ impl DomainParticipantInner {
     socket_send_buffer_size: usize,
     only_networks: Option<Vec<IpAddr>>,
     same_host_loopback: bool,
+    scope: PeerScope,
     dp_waker: LoopWaker,
     discovery_sample_sender: ReadySender<mio1::Token>,
   ) -> CreateResult<Self> {
     #[cfg(not(feature = "security"))]
     let _dummy = _qos_policies; // to make clippy happy
 
-    let only_networks: Option<Arc<[IpAddr]>> = only_networks.map(|v| v.into());
+    // cstep patch: a participant bound to loopback is reachable, and advertises
+    // itself, on loopback only.
+    let only_networks: Option<Arc<[IpAddr]>> = if scope.loopback_only() {
+      Some(Arc::new([scope.bind_address()]))
+    } else {
+      only_networks.map(|v| v.into())
+    };
+    let bind_address = scope.bind_address().to_string();
 
     let mut listeners = HashMap::new();
 
-    match UDPListener::new_multicast_with_buf_size(
-      "0.0.0.0",
-      spdp_well_known_multicast_port(domain_id),
-      Ipv4Addr::new(239, 255, 0, 1),
-      socket_receive_buffer_size,
-      only_networks.as_deref(),
-    ) {
-      Ok(l) => {
-        listeners.insert(DISCOVERY_MUL_LISTENER_TOKEN, l);
+    // cstep patch: multicast listeners only where the range allows multicast.
+    if scope.multicast() {
+      match UDPListener::new_multicast_with_buf_size(
+        "0.0.0.0",
+        spdp_well_known_multicast_port(domain_id),
+        Ipv4Addr::new(239, 255, 0, 1),
+        socket_receive_buffer_size,
+        only_networks.as_deref(),
+      ) {
+        Ok(l) => {
+          listeners.insert(DISCOVERY_MUL_LISTENER_TOKEN, l);
+        }
+        Err(e) => warn!("Cannot get multicast discovery listener: {e:?}"),
       }
-      Err(e) => warn!("Cannot get multicast discovery listener: {e:?}"),
     }
 
     let mut participant_id = 0;
@@ -1267,7 +1309,7 @@ impl DomainParticipantInner {
     // Numbers"
     while discovery_listener.is_none() && participant_id < 120 {
       discovery_listener = UDPListener::new_unicast_with_buf_size(
-        "0.0.0.0",
+        &bind_address, // cstep patch (was "0.0.0.0")
         spdp_well_known_unicast_port(domain_id, participant_id),
         socket_receive_buffer_size,
       )
@@ -1288,21 +1330,23 @@ impl DomainParticipantInner {
 
     // Now the user traffic listeners
 
-    match UDPListener::new_multicast_with_buf_size(
-      "0.0.0.0",
-      user_traffic_multicast_port(domain_id),
-      Ipv4Addr::new(239, 255, 0, 1),
-      socket_receive_buffer_size,
-      only_networks.as_deref(),
-    ) {
-      Ok(l) => {
-        listeners.insert(USER_TRAFFIC_MUL_LISTENER_TOKEN, l);
+    if scope.multicast() {
+      match UDPListener::new_multicast_with_buf_size(
+        "0.0.0.0",
+        user_traffic_multicast_port(domain_id),
+        Ipv4Addr::new(239, 255, 0, 1),
+        socket_receive_buffer_size,
+        only_networks.as_deref(),
+      ) {
+        Ok(l) => {
+          listeners.insert(USER_TRAFFIC_MUL_LISTENER_TOKEN, l);
+        }
+        Err(e) => warn!("Cannot get multicast user traffic listener: {e:?}"),
       }
-      Err(e) => warn!("Cannot get multicast user traffic listener: {e:?}"),
     }
 
     let user_traffic_listener = UDPListener::new_unicast_with_buf_size(
-      "0.0.0.0",
+      &bind_address, // cstep patch (was "0.0.0.0")
       user_traffic_unicast_port(domain_id, participant_id),
       socket_receive_buffer_size,
     )
@@ -1310,14 +1354,13 @@ impl DomainParticipantInner {
       if matches!(e.kind(), ErrorKind::AddrInUse) {
         // If we do not get the preferred listening port,
         // try again, with "any" port number.
-        UDPListener::new_unicast_with_buf_size("0.0.0.0", 0, socket_receive_buffer_size).or_else(
-          |e| {
+        UDPListener::new_unicast_with_buf_size(&bind_address, 0, socket_receive_buffer_size)
+          .or_else(|e| {
             create_error_out_of_resources!(
               "Could not open unicast user traffic listener, any port number: {:?}",
               e
             )
-          },
-        )
+          })
       } else {
         create_error_out_of_resources!("Could not open unicast user traffic listener: {e:?}")
       }
@@ -1412,6 +1455,7 @@ impl DomainParticipantInner {
           only_networks_for_ev_loop,
           socket_send_buffer_size,
           same_host_loopback,
+          scope,
           reader_ready_rx,
           writer_ready_rx,
           dp_waker,

@@ -14,7 +14,7 @@ use log::{debug, error, info, trace, warn};
 use socket2::{Domain, Protocol, SockAddr, Socket, Type};
 
 use crate::{
-  network::util::get_local_multicast_ip_addrs_filtered,
+  network::{scope::PeerScope, util::get_local_multicast_ip_addrs_filtered},
   rtps::{
     outbound::{ControlQueue, Datagram, SendOutcome, SocketId, CONTROL_QUEUE_WARN_LEN},
     transmit::InterfaceSelector,
@@ -38,12 +38,15 @@ pub struct UDPSender {
   // sent immediately. Drained on write readiness by `flush_control`.
   // (see src/rtps/nonblocking_transmit_design.md)
   control_queues: RefCell<HashMap<SocketId, ControlQueue>>,
+
+  // cstep patch: the hosts this participant may send to, and how it binds.
+  scope: PeerScope,
 }
 
 impl UDPSender {
   #[cfg(test)]
   pub fn new(sender_port: u16) -> io::Result<Self> {
-    Self::new_with_networks(sender_port, None, 0)
+    Self::new_with_networks(sender_port, None, 0, PeerScope::default())
   }
 
   // Request (and verify) SO_SNDBUF on a sender socket. `size == 0` leaves the
@@ -75,9 +78,12 @@ impl UDPSender {
     sender_port: u16,
     only_networks: Option<&[IpAddr]>,
     send_buffer_size: usize,
+    scope: PeerScope,
   ) -> io::Result<Self> {
     let unicast_socket = {
-      let saddr: SocketAddr = SocketAddr::new("0.0.0.0".parse().unwrap(), sender_port);
+      // cstep patch: bound where the scope says (loopback in `Localhost` and
+      // `Off`), not always "0.0.0.0".
+      let saddr: SocketAddr = SocketAddr::new(scope.bind_address(), sender_port);
       let raw_socket = Socket::new(Domain::IPV4, Type::DGRAM, Some(Protocol::UDP))?;
       Self::set_and_verify_send_buffer(&raw_socket, send_buffer_size);
       raw_socket.bind(&SockAddr::from(saddr))?;
@@ -96,7 +102,13 @@ impl UDPSender {
       });
 
     let mut multicast_sockets = Vec::with_capacity(1);
-    for multicast_if_ipaddr in get_local_multicast_ip_addrs_filtered(only_networks)? {
+    // cstep patch: no multicast sockets outside `Subnet`.
+    let multicast_ifs = if scope.multicast() {
+      get_local_multicast_ip_addrs_filtered(only_networks)?
+    } else {
+      Vec::new()
+    };
+    for multicast_if_ipaddr in multicast_ifs {
       // beef: specify output interface
       trace!("UDPSender: Multicast sender on interface {multicast_if_ipaddr:?}");
 
@@ -160,6 +172,7 @@ impl UDPSender {
       unicast_socket,
       multicast_sockets,
       control_queues: RefCell::new(HashMap::new()),
+      scope,
     };
     info!("UDPSender::new() --> {sender:?}");
     Ok(sender)
@@ -217,6 +230,12 @@ impl UDPSender {
     };
     if !self.socket_can_reach(id, addr) {
       trace!("raw_send: {id:?} cannot reach {addr} (address family mismatch), dropping");
+      return SendOutcome::Dropped;
+    }
+    // cstep patch: nothing is sent to a host outside the discovery range, whatever
+    // locators a peer advertised.
+    if !self.scope.allows(addr.ip()) {
+      trace!("raw_send: {addr} is outside the discovery range, dropping");
       return SendOutcome::Dropped;
     }
     match socket.send_to(buffer, addr) {

@@ -1,7 +1,7 @@
 use std::{
   cell::RefCell,
   collections::{BTreeMap, BTreeSet, HashMap, VecDeque},
-  net::IpAddr,
+  net::{IpAddr, SocketAddr},
   rc::Rc,
   sync::{Arc, RwLock},
   time::{Duration, Instant},
@@ -24,7 +24,8 @@ use crate::{
   },
   messages::submessages::submessages::AckSubmessage,
   network::{
-    constant::SPDP_LOCALHOST_PEER_COUNT,
+    constant::{spdp_well_known_unicast_port, SPDP_LOCALHOST_PEER_COUNT},
+    scope::{DiscoveryRange, PeerScope},
     udp_listener::UDPListener,
     udp_sender::UDPSender,
     util::{local_interface_table, localhost_spdp_peer_locators, IfAddr},
@@ -49,6 +50,7 @@ use crate::{
     dds_cache::DDSCache,
     entity::RTPSEntity,
     guid::{EntityId, GuidPrefix, TokenDecode, GUID},
+    locator::Locator,
   },
   //QosPolicyBuilder,
   //QosPolicies,
@@ -140,6 +142,9 @@ pub struct DPEventLoop {
   // route same-host peers over loopback. See
   // `src/rtps/loopback_same_host_design.md`.
   same_host_loopback: bool,
+
+  // cstep patch: which hosts this participant exchanges datagrams with.
+  scope: PeerScope,
 }
 
 impl DPEventLoop {
@@ -164,6 +169,7 @@ impl DPEventLoop {
     only_networks: Option<Arc<[IpAddr]>>,
     socket_send_buffer_size: usize,
     same_host_loopback: bool,
+    scope: PeerScope,
     reader_ready: ReadyReceiver<EntityId>,
     writer_ready: ReadyReceiver<EntityId>,
     waker: LoopWaker,
@@ -212,7 +218,12 @@ impl DPEventLoop {
 
     // port number 0 means OS chooses an available port number.
     let udp_sender = try_init!(
-      UDPSender::new_with_networks(0, only_networks.as_deref(), socket_send_buffer_size),
+      UDPSender::new_with_networks(
+        0,
+        only_networks.as_deref(),
+        socket_send_buffer_size,
+        scope.clone(), // cstep patch
+      ),
       "UDPSender construction fail"
     );
 
@@ -257,6 +268,7 @@ impl DPEventLoop {
       participant_status_sender,
       discovery_command_sender,
       same_host_loopback,
+      scope,
     })
   }
 
@@ -342,6 +354,15 @@ impl DPEventLoop {
                   |l| l.messages_bounded(usize::MAX),
                 );
                 for (packet, origin) in udp_messages {
+                  // cstep patch: a datagram from a host outside the discovery range is
+                  // dropped unread, so it is never answered.
+                  if !ev_wrapper.scope.accepts(origin.source) {
+                    trace!(
+                      "dropping a datagram from {:?}: outside the discovery range",
+                      origin.source
+                    );
+                    continue;
+                  }
                   ev_wrapper
                     .message_receiver
                     .handle_received_packet(&packet, origin);
@@ -1116,19 +1137,43 @@ impl DPEventLoop {
     // - every writer may route a confirmed same-host peer over loopback.
     // See `src/rtps/loopback_same_host_design.md`.
     new_writer.set_prefer_loopback_same_host(self.same_host_loopback);
-    if self.same_host_loopback
-      && new_writer.guid().entity_id == EntityId::SPDP_BUILTIN_PARTICIPANT_WRITER
-    {
-      new_writer.set_extra_unicast_destinations(localhost_spdp_peer_locators(
-        self.domain_info.domain_id,
-        self.domain_info.participant_id,
-        SPDP_LOCALHOST_PEER_COUNT,
-      ));
+    if new_writer.guid().entity_id == EntityId::SPDP_BUILTIN_PARTICIPANT_WRITER {
+      new_writer.set_extra_unicast_destinations(self.spdp_unicast_destinations());
     }
 
     // The doorbell is a shared ready-queue plus the poll waker, not a
     // registration under the writer token.
     self.writers.insert(new_writer.guid().entity_id, new_writer);
+  }
+
+  /// cstep patch: where SPDP is announced by unicast besides multicast: the
+  /// localhost peers (with `same_host_loopback`, and always in `Localhost`
+  /// range, which has no multicast), and every static peer's well-known
+  /// discovery ports. `Off` announces nowhere.
+  fn spdp_unicast_destinations(&self) -> Vec<Locator> {
+    let domain_id = self.domain_info.domain_id;
+    let mut destinations = match self.scope.range() {
+      DiscoveryRange::Off => return Vec::new(),
+      DiscoveryRange::Localhost => true,
+      DiscoveryRange::Subnet => self.same_host_loopback,
+    }
+    .then(|| {
+      localhost_spdp_peer_locators(
+        domain_id,
+        self.domain_info.participant_id,
+        SPDP_LOCALHOST_PEER_COUNT,
+      )
+    })
+    .unwrap_or_default();
+    for peer in self.scope.static_peers() {
+      destinations.extend((0..SPDP_LOCALHOST_PEER_COUNT).map(|pid| {
+        Locator::from(SocketAddr::new(
+          *peer,
+          spdp_well_known_unicast_port(domain_id, pid),
+        ))
+      }));
+    }
+    destinations
   }
 
   fn remove_local_writer(&mut self, writer_guid: &GUID) {
@@ -1347,6 +1392,7 @@ mod tests {
         None,
         0,
         true,
+        PeerScope::default(), // cstep patch
         reader_ready,
         writer_ready,
         waker,

@@ -349,6 +349,7 @@ def build_model(settings: dict[str, Any], venv, device: str = "cpu", tensorboard
         clip_range=settings["clip_range"],
         ent_coef=settings["ent_coef"],
         max_grad_norm=settings["max_grad_norm"],
+        target_kl=settings.get("target_kl"),
         use_sde=settings["use_sde"],
         sde_sample_freq=settings["sde_sample_freq"],
         policy_kwargs=_policy_kwargs(settings),

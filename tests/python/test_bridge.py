@@ -64,6 +64,26 @@ def test_drone_hovers_near_its_start_under_zero_action_after_a_push():
         env.close()
 
 
+def test_a_zero_action_after_flight_holds_position():
+    """The waypoints are offsets from the drone: offset 0 must mean "stay here", whatever was
+    flown before (a horizontal integral term once kept pushing at 0.04 m/s after a flight)."""
+    env = CStepDroneEnv(empowered=False, arena=arena(0.3))
+    try:
+        env.reset(seed=0)
+        for _ in range(90):  # 3 s at full speed along x
+            env.step(np.array([1.0, 0.0]))
+        for _ in range(60):  # 2 s to stop
+            env.step(np.zeros(2))
+        x = env.sim.state().position[0]
+        for _ in range(150):  # 5 s held
+            env.step(np.zeros(2))
+        s = env.sim.state()
+        assert abs(s.position[0] - x) < 0.01, (x, s.position[0])
+        assert np.linalg.norm(s.velocity[:2]) < 0.005
+    finally:
+        env.close()
+
+
 def test_lidar_sees_the_walls_at_the_right_range_in_the_body_frame():
     sim = DroneSim(arena(0.3))  # block at y in [0.05, 0.55]: nothing ahead within 3 m
     try:

@@ -461,6 +461,8 @@ pub struct NodeSettings {
     pub markers_topic: String,
     /// `cstep_msgs/srv/Evaluate` service.
     pub evaluate_service: String,
+    /// `cstep_msgs/srv/EvaluateBatch` service: K states per call, scored in parallel.
+    pub evaluate_batch_service: String,
     /// Odometry older than this when a scan arrives is stale, seconds.
     pub input_timeout: f64,
     /// A scan stamped more than this many seconds before the newest one scored means that time
@@ -472,7 +474,7 @@ pub struct NodeSettings {
 }
 
 /// The parameter names [`NodeSettings`] owns.
-pub const NODE_PARAMETERS: [&str; 10] = [
+pub const NODE_PARAMETERS: [&str; 11] = [
     "odom_topic",
     "scan_topic",
     "goal_topic",
@@ -480,6 +482,7 @@ pub const NODE_PARAMETERS: [&str; 10] = [
     "reward_topic",
     "markers_topic",
     "evaluate_service",
+    "evaluate_batch_service",
     "input_timeout",
     "time_jump_tolerance",
     "use_sim_time",
@@ -505,6 +508,7 @@ impl NodeSettings {
         let reward_topic = name("reward_topic")?;
         let markers_topic = name("markers_topic")?;
         let evaluate_service = name("evaluate_service")?;
+        let evaluate_batch_service = name("evaluate_batch_service")?;
         let input_timeout = required("input_timeout", positive(set, "input_timeout")?)?;
         let time_jump_tolerance =
             required("time_jump_tolerance", positive(set, "time_jump_tolerance")?)?;
@@ -526,6 +530,7 @@ impl NodeSettings {
             reward_topic,
             markers_topic,
             evaluate_service,
+            evaluate_batch_service,
             input_timeout,
             time_jump_tolerance,
             use_sim_time,

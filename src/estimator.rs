@@ -191,22 +191,7 @@ impl Estimator {
     pub fn evaluate_with_seed(&self, state: &RobotState, scan: &Scan, seed: u64) -> Estimate {
         let started = Instant::now();
         let s = &self.settings;
-        let mut estimate = Estimate {
-            empowerment: EMPOWERMENT_FLOOR,
-            volumes: Volumes {
-                reachable: 0.0,
-                terminal: 0.0,
-                free: 0.0,
-                hull_vertices: 0,
-                terminal_clusters: 0,
-            },
-            horizon: s.horizon,
-            num_trajectories: s.trajectories,
-            num_colliding: s.trajectories,
-            status: Status::Ok,
-            rollout: Rollout::default(),
-            elapsed: Duration::ZERO,
-        };
+        let mut estimate = self.floor(Status::Ok);
         let occupancy = Occupancy::build(scan, &state.attitude, state.position.z, &s.occupancy);
         let summary = occupancy.summary();
         estimate.status = if scan.ranges.is_empty() {
@@ -238,6 +223,35 @@ impl Estimator {
         };
         estimate.elapsed = started.elapsed();
         estimate
+    }
+
+    /// The estimate of a state its caller knows to be in collision (a simulator that saw
+    /// contact): the floor with [`Status::InCollision`], as for a robot whose scan shows it
+    /// overlapping an obstacle, without reading a scan or rolling out.
+    pub fn known_collision(&self) -> Estimate {
+        self.floor(Status::InCollision)
+    }
+
+    /// The floor estimate with `status`: zero volumes, every trajectory counted as colliding,
+    /// no rollout.
+    fn floor(&self, status: Status) -> Estimate {
+        let s = &self.settings;
+        Estimate {
+            empowerment: EMPOWERMENT_FLOOR,
+            volumes: Volumes {
+                reachable: 0.0,
+                terminal: 0.0,
+                free: 0.0,
+                hull_vertices: 0,
+                terminal_clusters: 0,
+            },
+            horizon: s.horizon,
+            num_trajectories: s.trajectories,
+            num_colliding: s.trajectories,
+            status,
+            rollout: Rollout::default(),
+            elapsed: Duration::ZERO,
+        }
     }
 
     /// The control sample for `seed`, drawn once and kept while the seed stays the same.

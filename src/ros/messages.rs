@@ -264,6 +264,32 @@ pub struct EvaluateResponse {
     pub reward: EmpoweredReward,
 }
 
+/// `cstep_msgs/srv/EvaluateBatch` request: K states to score in one call, each as
+/// [`EvaluateRequest`] would score it alone.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct EvaluateBatchRequest {
+    /// The K robot states.
+    pub odom: Vec<Odometry>,
+    /// The K scans, `scan[i]` taken at `odom[i]`.
+    pub scan: Vec<LaserScan>,
+    /// Empty, or K goal positions (`goal[i]` used when `has_goal[i]`).
+    pub goal: Vec<Point>,
+    /// Empty (no goals), or K flags.
+    pub has_goal: Vec<bool>,
+    /// Empty, or K flags: the caller knows state `i` is in collision.
+    pub in_collision: Vec<bool>,
+}
+
+/// `cstep_msgs/srv/EvaluateBatch` response: one score and reward per requested state.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct EvaluateBatchResponse {
+    /// The scores, in request order.
+    pub empowerment: Vec<Empowerment>,
+    /// The rewards, in request order.
+    pub reward: Vec<EmpoweredReward>,
+}
+
 /// `diagnostic_msgs/KeyValue`.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 pub struct KeyValue {
@@ -449,6 +475,8 @@ ros_messages!(
     EmpoweredReward,
     EvaluateRequest,
     EvaluateResponse,
+    EvaluateBatchRequest,
+    EvaluateBatchResponse,
     DiagnosticArray,
     MarkerArray
 );

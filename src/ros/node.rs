@@ -4,7 +4,9 @@
 //! arrive on the DDS thread and go into a one-slot mailbox; a worker thread scores whatever is
 //! newest, so a slow evaluation never builds a queue — a scan replaced before it was scored is
 //! counted as skipped. The `/cstep/evaluate` service scores a given state synchronously with the
-//! configured seed, so identical requests get identical answers. Diagnostics report input ages,
+//! configured seed, so identical requests get identical answers; `/cstep/evaluate_batch` scores
+//! K states in one call, in parallel, each exactly as `/cstep/evaluate` would, and scores a state
+//! its caller reports in collision at the floor without rolling out. Diagnostics report input ages,
 //! counts of skipped, stale and rejected inputs, and the last score, once a second.
 //! Scans are scored only while someone subscribes to the scores (`/cstep/empowerment` or
 //! `/cstep/reward`), as lazy ROS publishers do: a simulation that takes its rewards from the
@@ -19,11 +21,11 @@ use std::sync::{Arc, Condvar, Mutex};
 use std::time::{Duration, Instant};
 
 use futures::StreamExt;
-use nalgebra::Vector3;
+use rayon::prelude::*;
 use ros2_client::qos::{Durability, History, WhenFull};
 use ros2_client::{
-    MessageTypeName, Name, Node, NodeName, NodeOptions, ParameterValue, Publisher, QosProfile,
-    ServiceMapping, ServiceTypeName,
+    Message, MessageTypeName, Name, Node, NodeName, NodeOptions, ParameterValue, Publisher,
+    QosProfile, Server, ServiceMapping, ServiceTypeName,
 };
 
 use super::args::RosArgs;
@@ -33,12 +35,13 @@ use super::convert::{
 };
 use super::markers::rollout_markers;
 use super::messages::{
-    DiagnosticArray, DiagnosticStatus, EmpoweredReward, Empowerment, EvaluateRequest,
-    EvaluateResponse, Header, KeyValue, LaserScan, MarkerArray, Odometry, PoseStamped, Time,
+    DiagnosticArray, DiagnosticStatus, EmpoweredReward, Empowerment, EvaluateBatchRequest,
+    EvaluateBatchResponse, EvaluateRequest, EvaluateResponse, Header, KeyValue, LaserScan,
+    MarkerArray, Odometry, Point, PoseStamped, Time,
 };
 use super::stamps::{Order, StampOrder};
 use crate::config::{load_all, NodeSettings, DEFAULT_NODE_NAME};
-use crate::estimator::Estimator;
+use crate::estimator::{Estimator, EMPOWERMENT_FLOOR};
 use crate::reward::{empowered_reward, task_reward};
 
 /// Runs the node until `stop` is set: loads the parameters files and `--ros-args`, joins the
@@ -54,16 +57,13 @@ pub fn run(config: &[PathBuf], ros_args: &RosArgs, stop: Arc<AtomicBool>) -> Res
     let (settings, interface) =
         load_all(&paths, node_name, &ros_args.params).map_err(|e| e.to_string())?;
     let estimator = Estimator::from_settings(&settings).map_err(|e| e.to_string())?;
-    let shared = Arc::new(Shared {
+    let shared = Arc::new(Shared::new(
         estimator,
-        safety_coefficient: Mutex::new(settings.safety_coefficient),
-        timeout: Duration::from_secs_f64(interface.input_timeout),
-        time_jump_tolerance: interface.time_jump_tolerance,
-        latest: Mutex::default(),
-        mailbox: Mutex::new(None),
-        arrived: Condvar::new(),
-        stopping: stop,
-    });
+        settings.safety_coefficient,
+        Duration::from_secs_f64(interface.input_timeout),
+        interface.time_jump_tolerance,
+        stop,
+    ));
 
     let context = context_from_env(true)?;
     let namespace = ros_args.namespace.as_deref().unwrap_or("/");
@@ -77,7 +77,7 @@ pub fn run(config: &[PathBuf], ros_args: &RosArgs, stop: Arc<AtomicBool>) -> Res
     let ports = Ports::open(&mut node, &interface, ros_args, namespace)?;
     eprintln!(
         "cstep node {} on ROS_DOMAIN_ID {}: {} + {} -> {}, {} (markers on {} while subscribed); \
-         service {}",
+         services {}, {}",
         node.fully_qualified_name(),
         context.domain_id(),
         ros_args.remap(&interface.odom_topic),
@@ -86,6 +86,7 @@ pub fn run(config: &[PathBuf], ros_args: &RosArgs, stop: Arc<AtomicBool>) -> Res
         ros_args.remap(&interface.reward_topic),
         ros_args.remap(&interface.markers_topic),
         ros_args.remap(&interface.evaluate_service),
+        ros_args.remap(&interface.evaluate_batch_service),
     );
 
     let worker = {
@@ -135,7 +136,7 @@ struct PostedScan {
 #[derive(Default)]
 struct Latest {
     odom: Option<(Odometry, Instant)>,
-    goal: Option<Vector3<f64>>,
+    goal: Option<Point>,
     last_scan: Option<Instant>,
     last_score: Option<(f64, bool, Duration)>,
     scored: u64,
@@ -157,7 +158,7 @@ struct Latest {
     time_jump: Option<String>,
 }
 
-/// The node's topics and service.
+/// The node's topics and services.
 struct Ports {
     odom: ros2_client::Subscription<Odometry>,
     scan: ros2_client::Subscription<LaserScan>,
@@ -166,7 +167,8 @@ struct Ports {
     reward: Arc<Publisher<EmpoweredReward>>,
     markers: Arc<Publisher<MarkerArray>>,
     diagnostics: Publisher<DiagnosticArray>,
-    evaluate: ros2_client::Server<EvaluateRequest, EvaluateResponse>,
+    evaluate: Server<EvaluateRequest, EvaluateResponse>,
+    evaluate_batch: Server<EvaluateBatchRequest, EvaluateBatchResponse>,
 }
 
 impl Ports {
@@ -223,7 +225,14 @@ impl Ports {
             "DiagnosticArray",
             &reliable,
         )?;
-        let service_name = resolve(namespace, args.remap(&interface.evaluate_service));
+        let service = |name: &str, kind: &str| {
+            let name = resolve(namespace, args.remap(name));
+            let parsed =
+                Name::parse(&name).map_err(|e| format!("service name \"{name}\": {e:?}"))?;
+            Ok::<_, String>((parsed, ServiceTypeName::new("cstep_msgs", kind)))
+        };
+        let (evaluate_name, evaluate_type) = service(&interface.evaluate_service, "Evaluate")?;
+        let (batch_name, batch_type) = service(&interface.evaluate_batch_service, "EvaluateBatch")?;
         Ok(Self {
             odom: node
                 .create_subscription(&odom_topic, Some(sensor.clone()))
@@ -252,13 +261,21 @@ impl Ports {
             evaluate: node
                 .create_server(
                     ServiceMapping::Enhanced,
-                    &Name::parse(&service_name)
-                        .map_err(|e| format!("service name \"{service_name}\": {e:?}"))?,
-                    &ServiceTypeName::new("cstep_msgs", "Evaluate"),
+                    &evaluate_name,
+                    &evaluate_type,
+                    reliable.clone(),
+                    reliable.clone(),
+                )
+                .map_err(failed("the evaluate service"))?,
+            evaluate_batch: node
+                .create_server(
+                    ServiceMapping::Enhanced,
+                    &batch_name,
+                    &batch_type,
                     reliable.clone(),
                     reliable,
                 )
-                .map_err(failed("the evaluate service"))?,
+                .map_err(failed("the evaluate_batch service"))?,
         })
     }
 }
@@ -309,8 +326,9 @@ async fn serve(shared: &Arc<Shared>, ports: &Ports, node: &Node) {
     });
     let goals = ports.goal.async_stream().for_each(|received| async move {
         if let Ok((goal, _)) = received {
-            match goal_position(&goal.pose.position) {
-                Ok(goal) => shared.latest().goal = Some(goal),
+            let p = goal.pose.position;
+            match goal_position(&p) {
+                Ok(_) => shared.latest().goal = Some(p),
                 Err(e) => shared.note_problem(|l| l.rejected += 1, &format!("goal_pose: {e}")),
             }
         }
@@ -337,16 +355,12 @@ async fn serve(shared: &Arc<Shared>, ports: &Ports, node: &Node) {
             shared.arrived.notify_one();
         }
     });
-    let service = ports
-        .evaluate
-        .receive_request_stream()
-        .for_each(|received| async move {
-            if let Ok((id, request)) = received {
-                let response = shared.evaluate_request(&request);
-                if let Err(e) = ports.evaluate.async_send_response(id, response).await {
-                    shared.latest().last_problem = Some(format!("evaluate reply failed: {e:?}"));
-                }
-            }
+    let service = answer_requests(shared, &ports.evaluate, "evaluate", |request| {
+        shared.evaluate_request(request)
+    });
+    let batch_service =
+        answer_requests(shared, &ports.evaluate_batch, "evaluate_batch", |request| {
+            shared.evaluate_batch(request)
         });
     let diagnostics = async {
         loop {
@@ -365,10 +379,35 @@ async fn serve(shared: &Arc<Shared>, ports: &Ports, node: &Node) {
         Box::pin(goals),
         Box::pin(scans),
         Box::pin(service),
+        Box::pin(batch_service),
         Box::pin(diagnostics),
         Box::pin(stopped),
     ])
     .await;
+}
+
+/// Answers each request `server` receives with `answer`, until the request stream ends; a reply
+/// that cannot be sent is noted for diagnostics (`name` says which service's).
+async fn answer_requests<Req, Resp>(
+    shared: &Shared,
+    server: &Server<Req, Resp>,
+    name: &str,
+    answer: impl Fn(&Req) -> Resp,
+) where
+    Req: Message + Clone + 'static,
+    Resp: Message + 'static,
+{
+    let answer = &answer;
+    server
+        .receive_request_stream()
+        .for_each(|received| async move {
+            if let Ok((id, request)) = received {
+                if let Err(e) = server.async_send_response(id, answer(&request)).await {
+                    shared.latest().last_problem = Some(format!("{name} reply failed: {e:?}"));
+                }
+            }
+        })
+        .await;
 }
 
 /// What the scoring thread publishes to.
@@ -420,7 +459,13 @@ fn score_scans(shared: &Shared, outputs: &Outputs) {
             continue;
         }
         let goal = shared.latest().goal;
-        match shared.score(&odom, &scan, goal, with_markers) {
+        let query = Query {
+            odom: &odom,
+            scan: &scan,
+            goal: goal.as_ref(),
+            in_collision: false,
+        };
+        match shared.score(&query, shared.safety_coefficient(), with_markers) {
             Ok((e, r, markers)) => {
                 shared.scored(stamp, order);
                 // A full queue or a lost subscriber is not the node's failure; diagnostics show it.
@@ -440,7 +485,80 @@ fn score_scans(shared: &Shared, outputs: &Outputs) {
     }
 }
 
+/// One state to score: a `/cstep/evaluate` request, one entry of a `/cstep/evaluate_batch`
+/// request, or a scan with the newest odometry and goal.
+struct Query<'a> {
+    odom: &'a Odometry,
+    scan: &'a LaserScan,
+    /// Goal of the task reward; None for a task reward of 1.
+    goal: Option<&'a Point>,
+    /// The caller reports the robot in collision: scored at the floor without rolling out.
+    in_collision: bool,
+}
+
+impl<'a> Query<'a> {
+    /// The states of a batch request, or why its arrays cannot describe K states: `scan` must
+    /// hold as many entries as `odom`, `goal` and `has_goal` none or as many (both alike), and
+    /// `in_collision` none or as many.
+    fn batch(request: &'a EvaluateBatchRequest) -> Result<Vec<Self>, String> {
+        let k = request.odom.len();
+        let optional = [
+            ("goal", request.goal.len()),
+            ("has_goal", request.has_goal.len()),
+            ("in_collision", request.in_collision.len()),
+        ];
+        if request.scan.len() != k {
+            return Err(format!(
+                "request: {} scans for {k} odometries (one scan per state)",
+                request.scan.len()
+            ));
+        }
+        if let Some((name, n)) = optional.into_iter().find(|&(_, n)| n != 0 && n != k) {
+            return Err(format!(
+                "request: {name} has {n} entries for {k} states (0 or {k})"
+            ));
+        }
+        if request.goal.len() != request.has_goal.len() {
+            return Err(format!(
+                "request: goal has {} entries and has_goal {} (both or neither)",
+                request.goal.len(),
+                request.has_goal.len()
+            ));
+        }
+        Ok((0..k)
+            .map(|i| Query {
+                odom: &request.odom[i],
+                scan: &request.scan[i],
+                goal: (request.has_goal.get(i) == Some(&true)).then(|| &request.goal[i]),
+                in_collision: request.in_collision.get(i) == Some(&true),
+            })
+            .collect())
+    }
+}
+
 impl Shared {
+    /// The shared state of a node scoring with `estimator`, safety coefficient `c` until a
+    /// parameter change, odometry older than `timeout` counted stale, and a scan stamped more
+    /// than `time_jump_tolerance` seconds before the newest scored taken for a jump back in time.
+    fn new(
+        estimator: Estimator,
+        c: f64,
+        timeout: Duration,
+        time_jump_tolerance: f64,
+        stopping: Arc<AtomicBool>,
+    ) -> Self {
+        Self {
+            estimator,
+            safety_coefficient: Mutex::new(c),
+            timeout,
+            time_jump_tolerance,
+            latest: Mutex::default(),
+            mailbox: Mutex::new(None),
+            arrived: Condvar::new(),
+            stopping,
+        }
+    }
+
     fn latest(&self) -> std::sync::MutexGuard<'_, Latest> {
         self.latest.lock().unwrap_or_else(|e| e.into_inner())
     }
@@ -459,36 +577,48 @@ impl Shared {
         }
     }
 
+    /// The safety coefficient in effect now.
+    fn safety_coefficient(&self) -> f64 {
+        *self
+            .safety_coefficient
+            .lock()
+            .unwrap_or_else(|e| e.into_inner())
+    }
+
     fn note_problem(&self, count: impl FnOnce(&mut Latest), problem: &str) {
         let mut latest = self.latest();
         count(&mut latest);
         latest.last_problem = Some(problem.to_owned());
     }
 
-    /// Scores one odometry and scan pair, with the markers of the evaluation if asked; a
-    /// malformed input is an error naming the field.
+    /// Scores one state with safety coefficient `c`, with the markers of the evaluation if
+    /// asked; a malformed input is an error naming the field.
     fn score(
         &self,
-        odom: &Odometry,
-        scan: &LaserScan,
-        goal: Option<Vector3<f64>>,
+        query: &Query,
+        c: f64,
         with_markers: bool,
     ) -> Result<(Empowerment, EmpoweredReward, Option<MarkerArray>), String> {
-        let state = odometry_to_state(odom).map_err(|e| format!("odometry: {e}"))?;
-        let scan_in = laser_scan_to_scan(scan).map_err(|e| format!("scan: {e}"))?;
-        let estimate = self.estimator.evaluate(&state, &scan_in);
-        let c = *self
-            .safety_coefficient
-            .lock()
-            .unwrap_or_else(|e| e.into_inner());
+        let state = odometry_to_state(query.odom).map_err(|e| format!("odometry: {e}"))?;
+        let scan = laser_scan_to_scan(query.scan).map_err(|e| format!("scan: {e}"))?;
+        let goal = query
+            .goal
+            .map(goal_position)
+            .transpose()
+            .map_err(|e| e.to_string())?;
+        let estimate = if query.in_collision {
+            self.estimator.known_collision()
+        } else {
+            self.estimator.evaluate(&state, &scan)
+        };
         let reward = empowered_reward(
             estimate.empowerment,
             c,
             task_reward(&state.position, goal.as_ref()),
         );
         let header = Header {
-            stamp: scan.header.stamp,
-            frame_id: odom.header.frame_id.clone(),
+            stamp: query.scan.header.stamp,
+            frame_id: query.odom.header.frame_id.clone(),
         };
         {
             let mut latest = self.latest();
@@ -510,44 +640,80 @@ impl Shared {
         ))
     }
 
-    /// Answers `/cstep/evaluate`; a malformed request gets `valid = false` and the reason.
-    fn evaluate_request(&self, request: &EvaluateRequest) -> EvaluateResponse {
-        let goal = request
-            .has_goal
-            .then(|| goal_position(&request.goal))
-            .transpose()
-            .map_err(|e| e.to_string());
-        match goal.and_then(|goal| self.score(&request.odom, &request.scan, goal, false)) {
-            Ok((empowerment, reward, _)) => EvaluateResponse {
-                empowerment,
-                reward,
-            },
+    /// The service answer for one state: its score, or for a malformed one the floor with
+    /// `valid = false` and the reason (counted as rejected).
+    fn answer(&self, query: &Query, c: f64) -> (Empowerment, EmpoweredReward) {
+        match self.score(query, c, false) {
+            Ok((empowerment, reward, _)) => (empowerment, reward),
             Err(problem) => {
                 self.note_problem(|l| l.rejected += 1, &problem);
-                let c = *self
-                    .safety_coefficient
-                    .lock()
-                    .unwrap_or_else(|e| e.into_inner());
-                EvaluateResponse {
-                    empowerment: Empowerment {
-                        header: request.scan.header.clone(),
-                        empowerment: crate::estimator::EMPOWERMENT_FLOOR,
-                        safety_coefficient: c,
-                        horizon: self.estimator.settings().horizon,
-                        num_trajectories: self.estimator.settings().trajectories as u32,
-                        valid: false,
-                        status: problem,
-                        ..Default::default()
-                    },
-                    reward: EmpoweredReward {
-                        header: request.scan.header.clone(),
-                        empowerment_term: c.ln() + crate::estimator::EMPOWERMENT_FLOOR,
-                        safety_coefficient: c,
-                        valid: false,
-                        ..Default::default()
-                    },
-                }
+                self.rejected(query.scan.header.clone(), problem, c)
             }
+        }
+    }
+
+    /// The answer for a state that could not be scored: the floor, `valid = false`, `problem`
+    /// as the status, stamped with `header`.
+    fn rejected(&self, header: Header, problem: String, c: f64) -> (Empowerment, EmpoweredReward) {
+        (
+            Empowerment {
+                header: header.clone(),
+                empowerment: EMPOWERMENT_FLOOR,
+                safety_coefficient: c,
+                horizon: self.estimator.settings().horizon,
+                num_trajectories: self.estimator.settings().trajectories as u32,
+                valid: false,
+                status: problem,
+                ..Default::default()
+            },
+            EmpoweredReward {
+                header,
+                empowerment_term: c.ln() + EMPOWERMENT_FLOOR,
+                safety_coefficient: c,
+                valid: false,
+                ..Default::default()
+            },
+        )
+    }
+
+    /// Answers `/cstep/evaluate`; a malformed request gets `valid = false` and the reason.
+    fn evaluate_request(&self, request: &EvaluateRequest) -> EvaluateResponse {
+        let query = Query {
+            odom: &request.odom,
+            scan: &request.scan,
+            goal: request.has_goal.then_some(&request.goal),
+            in_collision: false,
+        };
+        let (empowerment, reward) = self.answer(&query, self.safety_coefficient());
+        EvaluateResponse {
+            empowerment,
+            reward,
+        }
+    }
+
+    /// Answers `/cstep/evaluate_batch`: each state exactly as [`Self::evaluate_request`] would
+    /// answer it alone (one safety coefficient for the whole batch), the states scored in
+    /// parallel on rayon's pool. When the request's arrays disagree in length, every state
+    /// (as many as the longer of `odom` and `scan`) is answered `valid = false` with the reason.
+    fn evaluate_batch(&self, request: &EvaluateBatchRequest) -> EvaluateBatchResponse {
+        let c = self.safety_coefficient();
+        let answers: Vec<_> = match Query::batch(request) {
+            Ok(queries) => queries.par_iter().map(|q| self.answer(q, c)).collect(),
+            Err(problem) => {
+                self.note_problem(|l| l.rejected += 1, &problem);
+                let states = request.odom.len().max(request.scan.len());
+                (0..states)
+                    .map(|i| {
+                        let header = request.scan.get(i).map(|s| s.header.clone());
+                        self.rejected(header.unwrap_or_default(), problem.clone(), c)
+                    })
+                    .collect()
+            }
+        };
+        let (empowerment, reward) = answers.into_iter().unzip();
+        EvaluateBatchResponse {
+            empowerment,
+            reward,
         }
     }
 
@@ -622,5 +788,181 @@ impl Shared {
                     .collect(),
             }],
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::config::Settings;
+    use crate::ros::convert::scan_to_laser_scan;
+    use crate::scene::{Lidar, Scene};
+    use nalgebra::{UnitQuaternion, Vector2};
+
+    fn shared(c: f64) -> Shared {
+        let estimator = Estimator::from_settings(&Settings::builtin()).unwrap();
+        Shared::new(estimator, c, Duration::from_secs(1), 1.0, Arc::default())
+    }
+
+    /// The robot at (x, y, 1) in a 2.5 m corridor flying along it at `speed`, and its scan.
+    fn state(x: f64, y: f64, speed: f64) -> (Odometry, LaserScan) {
+        let mut odom = Odometry::default();
+        odom.header.frame_id = "odom".into();
+        odom.pose.pose.position = Point { x, y, z: 1.0 };
+        odom.twist.twist.linear.x = speed;
+        let lidar = Lidar {
+            beams: 180,
+            range_min: 0.02,
+            range_max: 3.0,
+        };
+        let scan = Scene::corridor(2.5, 20.0).scan(
+            Vector2::new(x, y),
+            &UnitQuaternion::identity(),
+            &lidar,
+        );
+        let header = Header {
+            stamp: Time {
+                sec: (10.0 * x) as i32,
+                nanosec: 7,
+            },
+            frame_id: "base_link".into(),
+        };
+        (odom, scan_to_laser_scan(&scan, header))
+    }
+
+    /// Four states, the second and fourth with goals.
+    fn batch() -> EvaluateBatchRequest {
+        let states: Vec<_> = [
+            (0.0, 0.0, 0.0),
+            (1.0, 0.8, 1.5),
+            (2.0, -0.9, -1.0),
+            (3.0, 0.2, 3.0),
+        ]
+        .iter()
+        .map(|&(x, y, v)| state(x, y, v))
+        .collect();
+        EvaluateBatchRequest {
+            odom: states.iter().map(|s| s.0.clone()).collect(),
+            scan: states.iter().map(|s| s.1.clone()).collect(),
+            goal: (0..4)
+                .map(|i| Point {
+                    x: 4.0 + i as f64,
+                    y: 0.0,
+                    z: 1.0,
+                })
+                .collect(),
+            has_goal: vec![false, true, false, true],
+            in_collision: vec![],
+        }
+    }
+
+    /// Entry `i` of a batch as its own `/cstep/evaluate` request.
+    fn single(batch: &EvaluateBatchRequest, i: usize) -> EvaluateRequest {
+        EvaluateRequest {
+            odom: batch.odom[i].clone(),
+            scan: batch.scan[i].clone(),
+            goal: batch.goal[i],
+            has_goal: batch.has_goal[i],
+        }
+    }
+
+    #[test]
+    fn a_batch_answers_each_state_as_the_single_service_does() {
+        let node = shared(0.7);
+        let request = batch();
+        let answer = node.evaluate_batch(&request);
+        assert_eq!(answer.empowerment.len(), 4);
+        for i in 0..4 {
+            let alone = node.evaluate_request(&single(&request, i));
+            assert_eq!(answer.empowerment[i], alone.empowerment, "state {i}");
+            assert_eq!(answer.reward[i], alone.reward, "state {i}");
+            assert!(alone.empowerment.valid, "{:?}", alone.empowerment);
+        }
+        let distinct: std::collections::HashSet<u64> = answer
+            .empowerment
+            .iter()
+            .map(|e| e.empowerment.to_bits())
+            .collect();
+        assert_eq!(distinct.len(), 4, "the states differ, so do their scores");
+    }
+
+    #[test]
+    fn a_state_reported_in_collision_scores_the_floor_without_rolling_out() {
+        let c = 0.5;
+        let node = shared(c);
+        let mut request = batch();
+        request.in_collision = vec![false, true, false, false];
+        let answer = node.evaluate_batch(&request);
+        let (e, r) = (&answer.empowerment[1], &answer.reward[1]);
+        assert_eq!(e.empowerment, EMPOWERMENT_FLOOR);
+        assert!(!e.valid && !r.valid);
+        assert_eq!(e.status, "robot already in collision");
+        assert_eq!((e.free_volume, e.num_colliding), (0.0, e.num_trajectories));
+        let task = (-4.0_f64.hypot(0.8)).exp(); // goal (5, 0, 1), robot at (1, 0.8, 1)
+        assert!((r.task_reward - task).abs() < 1e-12);
+        assert_eq!(r.empowerment_term, c.ln() + EMPOWERMENT_FLOOR);
+        assert_eq!(r.reward, r.task_reward * r.empowerment_term);
+        // The other states are untouched by their neighbour's collision.
+        let alone = node.evaluate_request(&single(&request, 2));
+        assert_eq!(answer.empowerment[2], alone.empowerment);
+    }
+
+    #[test]
+    fn a_malformed_entry_is_rejected_alone_and_never_nan() {
+        let node = shared(1.0);
+        let mut request = batch();
+        request.scan[1].angle_increment = 0.0;
+        request.odom[2].pose.pose.orientation.w = 0.0;
+        request.goal[3].x = f64::NAN;
+        let answer = node.evaluate_batch(&request);
+        assert!(answer.empowerment[0].valid);
+        for (i, field) in [
+            (1, "scan: angle_increment"),
+            (2, "odometry: pose.pose.orientation"),
+            (3, "goal"),
+        ] {
+            let (e, r) = (&answer.empowerment[i], &answer.reward[i]);
+            assert!(!e.valid && !r.valid, "state {i}");
+            assert!(e.status.starts_with(field), "state {i}: {}", e.status);
+            assert_eq!(e.header, request.scan[i].header);
+            for v in [e.empowerment, r.reward, r.task_reward, r.empowerment_term] {
+                assert!(v.is_finite(), "state {i}: {v}");
+            }
+        }
+        assert_eq!(node.latest().rejected, 3);
+    }
+
+    #[test]
+    fn arrays_of_disagreeing_lengths_reject_every_state_with_the_reason() {
+        let node = shared(1.0);
+        type Spoil = fn(&mut EvaluateBatchRequest);
+        let cases: [(Spoil, &str); 4] = [
+            (|r| r.scan.truncate(3), "request: 3 scans for 4 odometries"),
+            (
+                |r| r.in_collision = vec![true],
+                "request: in_collision has 1 entries for 4 states",
+            ),
+            (
+                |r| r.goal.clear(),
+                "request: goal has 0 entries and has_goal 4",
+            ),
+            (
+                |r| r.has_goal.truncate(3),
+                "request: has_goal has 3 entries for 4 states",
+            ),
+        ];
+        for (spoil, status) in cases {
+            let mut request = batch();
+            spoil(&mut request);
+            let answer = node.evaluate_batch(&request);
+            assert_eq!(answer.empowerment.len(), 4, "{status}");
+            assert_eq!(answer.reward.len(), 4, "{status}");
+            for e in &answer.empowerment {
+                assert!(!e.valid && e.status.starts_with(status), "{}", e.status);
+                assert_eq!(e.empowerment, EMPOWERMENT_FLOOR);
+            }
+        }
+        let empty = node.evaluate_batch(&EvaluateBatchRequest::default());
+        assert!(empty.empowerment.is_empty() && empty.reward.is_empty());
     }
 }

@@ -15,8 +15,9 @@ use approx::assert_relative_eq;
 use byteorder::LittleEndian;
 use cstep::ros::messages::{
     ColorRGBA, CompressedImage, DiagnosticArray, Duration, EmpoweredReward, Empowerment,
-    EvaluateRequest, EvaluateResponse, Header, LaserScan, Marker, MarkerArray, MeshFile, Odometry,
-    Point, Pose, PoseStamped, Quaternion, Time, UVCoordinate, Vector3,
+    EvaluateBatchRequest, EvaluateBatchResponse, EvaluateRequest, EvaluateResponse, Header,
+    LaserScan, Marker, MarkerArray, MeshFile, Odometry, Point, Pose, PoseStamped, Quaternion, Time,
+    UVCoordinate, Vector3,
 };
 use serde::de::DeserializeOwned;
 use serde::Serialize;
@@ -25,10 +26,12 @@ use serde::Serialize;
 const CDR_LE: [u8; 4] = [0x00, 0x01, 0x00, 0x00];
 
 /// Every fixture file; `every_fixture_file_is_tested` keeps this list complete.
-const FIXTURES: [&str; 11] = [
+const FIXTURES: [&str; 13] = [
     "diagnostic_array",
     "empowered_reward",
     "empowerment",
+    "evaluate_batch_request",
+    "evaluate_batch_response",
     "evaluate_request",
     "evaluate_response",
     "header",
@@ -256,6 +259,40 @@ fn evaluate_response_round_trips() {
     assert_relative_eq!(r.empowerment_term, floor, max_relative = 1e-15);
     assert_eq!((r.task_reward, r.safety_coefficient), (1.0, 1.0));
     assert!(!r.valid);
+}
+
+#[test]
+fn evaluate_batch_request_round_trips() {
+    let req: EvaluateBatchRequest = decode("evaluate_batch_request");
+    assert_eq!((req.odom.len(), req.scan.len()), (2, 2));
+    check_odometry(&req.odom[0]);
+    assert_eq!(req.odom[1].pose.pose.position.x, -2.5);
+    check_laser_scan(&req.scan[0]);
+    assert_eq!(req.scan[1], LaserScan::default());
+    let goal = Point {
+        x: 4.0,
+        y: 0.0,
+        z: 1.0,
+    };
+    assert_eq!(req.goal, [goal, Point::default()]);
+    assert_eq!(req.has_goal, [true, false]);
+    assert_eq!(req.in_collision, [false, true]);
+}
+
+#[test]
+fn evaluate_batch_response_round_trips() {
+    let res: EvaluateBatchResponse = decode("evaluate_batch_response");
+    assert_eq!(res.empowerment[0], decode::<Empowerment>("empowerment"));
+    assert_eq!(res.reward[0], decode::<EmpoweredReward>("empowered_reward"));
+    let (e, r) = (&res.empowerment[1], &res.reward[1]);
+    let floor = 1e-4_f64.ln();
+    assert_relative_eq!(e.empowerment, floor, max_relative = 1e-15);
+    assert_eq!((e.num_trajectories, e.num_colliding), (150, 150));
+    assert_eq!(e.free_volume, 0.0);
+    assert!(!e.valid && !r.valid);
+    assert_eq!(e.status, "robot already in collision");
+    assert_relative_eq!(r.reward, 0.5_f64.ln() + floor, max_relative = 1e-15);
+    assert_eq!((r.task_reward, r.safety_coefficient), (1.0, 0.5));
 }
 
 #[test]

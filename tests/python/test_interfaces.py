@@ -7,7 +7,7 @@ from pathlib import Path
 import pytest
 from builtin_interfaces.msg import Time
 from cstep_msgs.msg import EmpoweredReward, Empowerment
-from cstep_msgs.srv import Evaluate
+from cstep_msgs.srv import Evaluate, EvaluateBatch
 from geometry_msgs.msg import Point
 from nav_msgs.msg import Odometry
 from rclpy.utilities import get_rmw_implementation_identifier
@@ -48,6 +48,17 @@ EVALUATE_RESPONSE_FIELDS = [
     ("empowerment", "cstep_msgs/Empowerment"),
     ("reward", "cstep_msgs/EmpoweredReward"),
 ]
+EVALUATE_BATCH_REQUEST_FIELDS = [
+    ("odom", "sequence<nav_msgs/Odometry>"),
+    ("scan", "sequence<sensor_msgs/LaserScan>"),
+    ("goal", "sequence<geometry_msgs/Point>"),
+    ("has_goal", "sequence<boolean>"),
+    ("in_collision", "sequence<boolean>"),
+]
+EVALUATE_BATCH_RESPONSE_FIELDS = [
+    ("empowerment", "sequence<cstep_msgs/Empowerment>"),
+    ("reward", "sequence<cstep_msgs/EmpoweredReward>"),
+]
 
 
 @pytest.mark.parametrize(
@@ -57,8 +68,17 @@ EVALUATE_RESPONSE_FIELDS = [
         (EmpoweredReward, EMPOWERED_REWARD_FIELDS),
         (Evaluate.Request, EVALUATE_REQUEST_FIELDS),
         (Evaluate.Response, EVALUATE_RESPONSE_FIELDS),
+        (EvaluateBatch.Request, EVALUATE_BATCH_REQUEST_FIELDS),
+        (EvaluateBatch.Response, EVALUATE_BATCH_RESPONSE_FIELDS),
     ],
-    ids=["Empowerment", "EmpoweredReward", "Evaluate.Request", "Evaluate.Response"],
+    ids=[
+        "Empowerment",
+        "EmpoweredReward",
+        "Evaluate.Request",
+        "Evaluate.Response",
+        "EvaluateBatch.Request",
+        "EvaluateBatch.Response",
+    ],
 )
 def test_fields_names_types_and_order(msg_type, fields):
     assert list(msg_type.get_fields_and_field_types().items()) == fields
@@ -118,7 +138,8 @@ def test_evaluate_request_and_response_construct():
 
 
 @pytest.mark.parametrize(
-    "path", ["msg/Empowerment.msg", "msg/EmpoweredReward.msg", "srv/Evaluate.srv"]
+    "path",
+    ["msg/Empowerment.msg", "msg/EmpoweredReward.msg", "srv/Evaluate.srv", "srv/EvaluateBatch.srv"],
 )
 def test_every_field_is_documented(path):
     """Each field line in the definition follows a comment line (its documentation)."""

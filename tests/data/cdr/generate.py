@@ -25,7 +25,7 @@ from pathlib import Path
 
 from builtin_interfaces.msg import Duration, Time
 from cstep_msgs.msg import EmpoweredReward, Empowerment
-from cstep_msgs.srv import Evaluate
+from cstep_msgs.srv import Evaluate, EvaluateBatch
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
 from geometry_msgs.msg import Point, PoseStamped
 from nav_msgs.msg import Odometry
@@ -229,6 +229,46 @@ def evaluate_response() -> Evaluate.Response:
     )
 
 
+def evaluate_batch_request() -> EvaluateBatch.Request:
+    """Two states: the first with a goal, the second (an empty scan) reported in collision, so
+    every sequence holds entries of its element type and the bool arrays differ."""
+    second = odometry()
+    second.pose.pose.position.x = -2.5
+    return EvaluateBatch.Request(
+        odom=[odometry(), second],
+        scan=[laser_scan(), laser_scan_empty()],
+        goal=[Point(x=4.0, y=0.0, z=1.0), Point()],
+        has_goal=[True, False],
+        in_collision=[False, True],
+    )
+
+
+def evaluate_batch_response() -> EvaluateBatch.Response:
+    """The answers to two states: a measured one and one reported in collision."""
+    floor = math.log(1e-4)
+    collided = Empowerment(
+        header=Header(stamp=Time(sec=0, nanosec=0), frame_id="odom"),
+        empowerment=floor,
+        safety_coefficient=0.5,
+        horizon=1.0,
+        num_trajectories=150,
+        num_colliding=150,
+        valid=False,
+        status="robot already in collision",
+    )
+    collided_reward = EmpoweredReward(
+        header=collided.header,
+        reward=math.log(0.5) + floor,
+        task_reward=1.0,
+        empowerment_term=math.log(0.5) + floor,
+        safety_coefficient=0.5,
+        valid=False,
+    )
+    return EvaluateBatch.Response(
+        empowerment=[empowerment(), collided], reward=[empowered_reward(), collided_reward]
+    )
+
+
 def marker_array() -> MarkerArray:
     """Two markers: the node's kind (points with per-point colours) and one with every Humble+
     field set, odd-length strings and byte arrays included, so each field's place and alignment
@@ -308,6 +348,8 @@ FIXTURES = {
     "empowered_reward": empowered_reward,
     "evaluate_request": evaluate_request,
     "evaluate_response": evaluate_response,
+    "evaluate_batch_request": evaluate_batch_request,
+    "evaluate_batch_response": evaluate_batch_response,
     "pose_stamped": pose_stamped,
     "diagnostic_array": diagnostic_array,
     "marker_array": marker_array,

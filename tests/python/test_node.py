@@ -5,9 +5,9 @@ import math
 import pytest
 from conftest import wait_until
 from cstep_msgs.msg import EmpoweredReward
-from cstep_msgs.srv import Evaluate
+from cstep_msgs.srv import Evaluate, EvaluateBatch
 from diagnostic_msgs.msg import DiagnosticStatus
-from geometry_msgs.msg import PoseStamped
+from geometry_msgs.msg import Point, PoseStamped
 from node_rig import RELIABLE, corridor_scan, cstep_eval, message_to_ordereddict, odometry
 from rcl_interfaces.msg import Parameter, ParameterType, ParameterValue
 from rcl_interfaces.srv import SetParameters
@@ -226,6 +226,110 @@ def test_a_rejected_far_future_stamp_and_a_clock_restart_do_not_stop_scoring(rig
     ]
     assert len(jumps) == 1, jumps
     assert "stamp ordering reset" in jumps[0], jumps
+
+
+FLOOR = math.log(1e-4)
+
+
+def float_bits(message) -> dict:
+    """A message's fields with every float as its exact hex form (bit-for-bit comparisons)."""
+    fields = message_to_ordereddict(message)
+    return {k: v.hex() if isinstance(v, float) else v for k, v in fields.items()}
+
+
+def service_caller(rig, srv_type, name: str):
+    """A function that calls service ``name`` and returns its reply (after discovery)."""
+    client = rig.node.create_client(srv_type, name)
+    wait_until(lambda: client.service_is_ready(), name, rig.executor)
+
+    def call(request):
+        future = client.call_async(request)
+        wait_until(future.done, f"the {name} reply", rig.executor)
+        return future.result()
+
+    return call
+
+
+def batch_of_states() -> EvaluateBatch.Request:
+    """Five different states (speeds, corridor widths, stamps), goals on three of them."""
+    request = EvaluateBatch.Request()
+    for k, (vx, width) in enumerate([(0.0, 2.5), (0.5, 2.5), (1.5, 1.6), (-1.0, 3.0), (2.5, 2.0)]):
+        request.odom.append(odometry(vx=vx))
+        request.scan.append(corridor_scan(100 + k, width=width))
+        request.goal.append(Point(x=1.0 + k, y=0.5, z=1.0))
+        request.has_goal.append(k % 2 == 0)
+    return request
+
+
+def test_evaluate_batch_answers_each_state_bit_for_bit_as_evaluate_does(rig):
+    single = service_caller(rig, Evaluate, "/cstep/evaluate")
+    batch = service_caller(rig, EvaluateBatch, "/cstep/evaluate_batch")
+    request = batch_of_states()
+    answer = batch(request)
+    assert len(answer.empowerment) == len(answer.reward) == 5
+    for i in range(5):
+        alone = single(
+            Evaluate.Request(
+                odom=request.odom[i],
+                scan=request.scan[i],
+                goal=request.goal[i],
+                has_goal=request.has_goal[i],
+            )
+        )
+        assert float_bits(answer.empowerment[i]) == float_bits(alone.empowerment), i
+        assert float_bits(answer.reward[i]) == float_bits(alone.reward), i
+        assert alone.empowerment.valid and alone.empowerment.header.stamp.sec == 100 + i
+    assert len({e.empowerment for e in answer.empowerment}) == 5  # five different scores
+    assert answer.reward[1].task_reward == 1.0  # no goal
+    assert answer.reward[2].task_reward == pytest.approx(math.exp(-math.hypot(3.0, 0.5)))
+
+
+def test_evaluate_batch_scores_states_reported_in_collision_at_the_floor(rig):
+    batch = service_caller(rig, EvaluateBatch, "/cstep/evaluate_batch")
+    request = batch_of_states()
+    request.in_collision = [False, False, True, False, True]
+    answer = batch(request)
+    free = batch(batch_of_states())
+    for i in (2, 4):
+        e, r = answer.empowerment[i], answer.reward[i]
+        assert e.empowerment == pytest.approx(FLOOR, abs=1e-14)  # the node's floor constant
+        assert not e.valid and not r.valid
+        assert e.status == "robot already in collision"
+        assert e.num_colliding == e.num_trajectories == 150 and e.free_volume == 0.0
+        assert r.empowerment_term == math.log(1.0) + e.empowerment
+        assert r.task_reward == free.reward[i].task_reward  # the goal still counts
+        assert r.reward == r.task_reward * r.empowerment_term
+        assert free.empowerment[i].valid  # the same state, not reported, is measured
+    for i in (0, 1, 3):
+        assert float_bits(answer.empowerment[i]) == float_bits(free.empowerment[i])
+
+
+def test_evaluate_batch_rejects_malformed_entries_alone_and_bad_lengths_whole(rig):
+    batch = service_caller(rig, EvaluateBatch, "/cstep/evaluate_batch")
+    request = batch_of_states()
+    request.odom[1].pose.pose.orientation.w = 0.0
+    request.scan[3].ranges = request.scan[3].ranges[:50]
+    request.goal[4].y = math.nan
+    answer = batch(request)
+    reasons = {1: "odometry: pose.pose.orientation", 3: "scan: ranges", 4: "goal: must be finite"}
+    for i, (e, r) in enumerate(zip(answer.empowerment, answer.reward, strict=True)):
+        assert e.valid == r.valid == (i not in reasons), (i, e.status)
+        if i in reasons:
+            assert e.status.startswith(reasons[i]), e.status
+            assert e.header.stamp.sec == 100 + i
+        for m in (e, r):
+            for name, value in message_to_ordereddict(m).items():
+                assert not isinstance(value, float) or math.isfinite(value), (i, name)
+
+    uneven = batch_of_states()
+    uneven.scan = uneven.scan[:4]
+    answer = batch(uneven)
+    assert len(answer.empowerment) == len(answer.reward) == 5
+    assert all(not e.valid for e in answer.empowerment)
+    assert {e.status for e in answer.empowerment} == {
+        "request: 4 scans for 5 odometries (one scan per state)"
+    }
+    assert batch(batch_of_states()).empowerment[0].valid  # still serving
 
 
 def test_diagnostics_go_stale_when_inputs_stop_and_recover(rig):

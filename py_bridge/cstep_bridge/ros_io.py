@@ -1,19 +1,29 @@
 """rclpy bridge between the simulation and a `cstep node`.
 
-Publishes ``/odom`` (nav_msgs/Odometry, twist in the body frame as REP 105 says), ``/scan``
-(sensor_msgs/LaserScan) and ``/clock``, all stamped with simulation time, and obtains the empowered
-reward of exactly that state from the node.
+Obtains the empowered reward of exactly a simulated state from the node and, for other
+listeners (RViz, a recorder), publishes ``/odom`` (nav_msgs/Odometry, twist in the body frame as
+REP 105 says), ``/scan`` (sensor_msgs/LaserScan) and ``/clock``, all stamped with simulation time.
 
 Two ways to get the reward:
 
-- ``mode="service"`` (default): one ``/cstep/evaluate`` call carrying the odometry, the scan and
-  the goal. The reply is computed from exactly the request — deterministic for the node's seed,
-  synchronous, no matching by stamp. The topic path cannot promise that: the node pairs each scan
-  with the *newest* odometry it has, checks odometry age against its own wall clock (a paused or
+- ``mode="service"`` (default): one ``/cstep/evaluate_batch`` call carrying the odometry, the scan
+  and the goal of one state (:meth:`RosBridge.evaluate`) or of K states
+  (:meth:`RosBridge.evaluate_batch`: one round trip for a whole vector step, the node scores the
+  states in parallel). The reply is computed from exactly the request — deterministic for the
+  node's seed, synchronous, no matching by stamp; each state gets the numbers ``/cstep/evaluate``
+  gives it alone. The topic path cannot promise that: the node pairs each scan with the *newest*
+  odometry it has, checks odometry age against its own wall clock (a paused or
   faster-than-real-time simulation reads as stale), keeps only the latest scan when busy, and the
-  scan travels best-effort (sensor-data QoS), so a reward can be skipped.
+  scan travels best-effort (sensor-data QoS), so a reward can be skipped. The simulation topics
+  are for observers only here, and ``publish_sim_topics=False`` skips them (the trainer does:
+  they cost a quarter of the reward call's time).
 - ``mode="topic"``: publish ``/odom`` then ``/scan`` and wait for the ``/cstep/reward`` message
-  whose stamp equals the scan's; the goal goes out on ``goal_pose``.
+  whose stamp equals the scan's; the goal goes out on ``goal_pose``. A state the caller reports
+  in collision still goes to the service (the topics cannot say so).
+
+A state reported ``in_collision`` (the simulator saw contact) is scored by the node without
+rolling out: empowerment at the floor, ``valid`` false, status "robot already in collision",
+reward ``task_reward · (ln c + floor)``.
 
 Either way a missing reply raises :class:`RewardTimeout` after ``timeout`` seconds: never a silent 0.
 When no node is given, :class:`CStepNode` starts a private ``cstep node`` on its own ROS domain
@@ -30,6 +40,7 @@ import signal
 import subprocess
 import tempfile
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -37,8 +48,8 @@ import numpy as np
 import rclpy
 from builtin_interfaces.msg import Time
 from cstep_msgs.msg import EmpoweredReward, Empowerment
-from cstep_msgs.srv import Evaluate
-from geometry_msgs.msg import PoseStamped
+from cstep_msgs.srv import EvaluateBatch
+from geometry_msgs.msg import Point, PoseStamped
 from nav_msgs.msg import Odometry
 from rclpy.context import Context
 from rclpy.executors import SingleThreadedExecutor
@@ -63,6 +74,8 @@ LATCHED = QoSProfile(
 RESEND_S = 0.25
 # Service mode: the longest single wait for a reply, between checks that the node still runs (ns).
 REPLY_WAIT_SLICE_NS = 50_000_000
+# The node's batched evaluate service (its `evaluate_batch_service` parameter's default).
+SERVICE = "/cstep/evaluate_batch"
 
 
 class RewardTimeout(RuntimeError):
@@ -120,6 +133,14 @@ def scan_msg(ranges: np.ndarray, t: float) -> LaserScan:
     # float32, as the field is; an array.array skips rclpy's per-element checks (10 µs).
     m.ranges = array.array("f", np.asarray(ranges, dtype=np.float32).tobytes())
     return m
+
+
+def _point(goal: np.ndarray | None) -> Point:
+    """A goal as a geometry_msgs/Point (the origin for none: its has_goal flag says so)."""
+    point = Point()
+    if goal is not None:
+        point.x, point.y, point.z = map(float, goal)
+    return point
 
 
 class CStepNode:
@@ -191,9 +212,13 @@ class Reward:
 
 
 class RosBridge:
-    """rclpy side: publishes the simulation's odometry, scan and clock and fetches rewards.
+    """rclpy side: fetches rewards for simulated states and publishes the simulation's odometry,
+    scan and clock.
 
     ``domain_id=None`` with ``start_node=True`` picks a private domain and starts a node on it.
+    ``publish_sim_topics``: in service mode, whether :meth:`evaluate` also publishes ``/odom``,
+    ``/scan`` and ``/clock`` for other listeners (nothing the reward needs; the topic mode always
+    publishes them).
     """
 
     def __init__(
@@ -205,10 +230,12 @@ class RosBridge:
         timeout: float = 5.0,
         discovery_timeout: float = 30.0,
         node_params: dict[str, str] | None = None,
+        publish_sim_topics: bool = True,
     ) -> None:
         if mode not in ("service", "topic"):
             raise ValueError(f"mode must be 'service' or 'topic', not {mode!r}")
         self.mode = mode
+        self.publish_sim_topics = publish_sim_topics or mode == "topic"
         self.timeout = timeout
         self.safety_coefficient = float(safety_coefficient)
         if domain_id is None:
@@ -233,7 +260,7 @@ class RosBridge:
         self.scan_pub = n.create_publisher(LaserScan, "scan", qos_profile_sensor_data)
         self.clock_pub = n.create_publisher(Clock, "/clock", RELIABLE)
         self.goal_pub = n.create_publisher(PoseStamped, "goal_pose", LATCHED)
-        self.client = n.create_client(Evaluate, "/cstep/evaluate")
+        self.client = n.create_client(EvaluateBatch, SERVICE)
         self._reply_wait = _rclpy.WaitSet(0, 0, 0, 1, 0, 0, self.context.handle)
         self.rewards: dict[tuple[int, int], EmpoweredReward] = {}
         if mode == "topic":
@@ -272,9 +299,9 @@ class RosBridge:
                 raise self._timed_out(what, timeout)
             self.executor.spin_once(timeout_sec=0.005)
 
-    def _call(self, request: Evaluate.Request, timeout: float) -> Evaluate.Response:
-        """Send ``request`` to ``/cstep/evaluate`` and block until a reply to it, at most
-        ``timeout`` seconds.
+    def _call(self, request: EvaluateBatch.Request, timeout: float) -> EvaluateBatch.Response:
+        """Send ``request`` to the node's batched evaluate service and block until a reply to
+        it, at most ``timeout`` seconds.
 
         The reply is waited for on a wait set holding only the client, as rclpy's own
         ``wait_for_message`` waits on one subscription. The executor's ``spin_once`` instead
@@ -299,32 +326,33 @@ class RosBridge:
                 self._reply_wait.wait(REPLY_WAIT_SLICE_NS)
                 if self._reply_wait.get_ready_entities("client"):
                     with handle:
-                        header, response = handle.take_response(Evaluate.Response)
+                        header, response = handle.take_response(EvaluateBatch.Response)
                     if header is not None and header.request_id.sequence_number in sent:
                         return response
                 else:
-                    self._check_node("/cstep/evaluate reply")
+                    self._check_node(f"{SERVICE} reply")
             if time.monotonic() >= deadline:
-                raise self._timed_out("/cstep/evaluate reply", timeout)
+                raise self._timed_out(f"{SERVICE} reply", timeout)
 
     def _wait_ready(self, timeout: float) -> None:
-        if self.mode == "service":
-            start = time.monotonic()
-            self._spin_until(self.client.service_is_ready, timeout, "/cstep/evaluate service")
-            # Discovered is not yet answering: the node's reply writer matches this client's
-            # reader up to a few seconds later. Ready means one probe call came back.
-            probe = Odometry()
-            probe.pose.pose.orientation.w = 1.0
-            request = Evaluate.Request(odom=probe, scan=scan_msg(np.full(2, np.inf), 0.0))
-            self._call(request, timeout - (time.monotonic() - start))
-        else:
+        """Wait until the service answers (both modes: the topic mode sends states reported in
+        collision to it) and, in topic mode, until the topics have matched."""
+        start = time.monotonic()
+        self._spin_until(self.client.service_is_ready, timeout, f"{SERVICE} service")
+        # Discovered is not yet answering: the node's reply writer matches this client's
+        # reader up to a few seconds later. Ready means one probe call came back.
+        probe = Odometry()
+        probe.pose.pose.orientation.w = 1.0
+        request = EvaluateBatch.Request(odom=[probe], scan=[scan_msg(np.full(2, np.inf), 0.0)])
+        self._call(request, timeout - (time.monotonic() - start))
+        if self.mode == "topic":
             self._spin_until(
                 lambda: (
                     self.scan_pub.get_subscription_count() >= 1
                     and self.odom_pub.get_subscription_count() >= 1
                     and self.node.count_publishers("/cstep/reward") >= 1
                 ),
-                timeout,
+                timeout - (time.monotonic() - start),
                 "matching odom/scan subscriptions and /cstep/reward publisher",
             )
 
@@ -337,24 +365,78 @@ class RosBridge:
             m.pose.orientation.w = 1.0
             self.goal_pub.publish(m)
 
-    def evaluate(self, state: DroneState, ranges: np.ndarray, t: float) -> Reward:
-        """Publish odometry, scan and clock at sim time ``t``; the node's reward for that state."""
+    def evaluate(
+        self, state: DroneState, ranges: np.ndarray, t: float, in_collision: bool = False
+    ) -> Reward:
+        """The node's reward for ``state`` with scan ``ranges`` at sim time ``t`` (and the goal
+        of :meth:`set_goal`); ``in_collision``: the simulator saw contact, so the node answers
+        the floor without rolling out. Publishes odometry, scan and clock first when
+        ``publish_sim_topics`` (always in topic mode)."""
         odom, scan = odometry_msg(state, t), scan_msg(ranges, t)
-        clock = Clock()
-        clock.clock = stamp(t)
-        self.clock_pub.publish(clock)
-        if self.mode == "service":
+        if self.publish_sim_topics:
+            clock = Clock()
+            clock.clock = stamp(t)
+            self.clock_pub.publish(clock)
+        if self.mode == "topic" and not in_collision:
+            return self._checked(None, self._reward_by_topic(state, odom, scan, t))
+        if self.publish_sim_topics:
             self.odom_pub.publish(odom)  # for other listeners; the reply rests on the request
             self.scan_pub.publish(scan)
-            req = Evaluate.Request(odom=odom, scan=scan)
-            if self.goal is not None:
-                req.goal.x, req.goal.y, req.goal.z = map(float, self.goal)
-                req.has_goal = True
-            res = self._call(req, self.timeout)
-            e, r = res.empowerment, res.reward
-        else:
-            r = self._reward_by_topic(state, odom, scan, t)
-            e = None
+        return self._request([odom], [scan], [self.goal], [in_collision])[0]
+
+    def evaluate_batch(
+        self,
+        states: Sequence[DroneState],
+        ranges_list: Sequence[np.ndarray],
+        t: float | Sequence[float],
+        goals: Sequence[np.ndarray | None] | None = None,
+        in_collision: Sequence[bool] | None = None,
+    ) -> list[Reward]:
+        """The node's rewards for K states in one service round trip, each the answer
+        :meth:`evaluate` would get for it alone: ``ranges_list[i]`` is the scan at
+        ``states[i]``, ``t`` the sim time of all or of each, ``goals[i]`` its goal (None: a
+        task reward of 1; ``goals=None``: no goals), ``in_collision[i]`` whether the simulator
+        saw it in contact. Nothing is published on the simulation topics."""
+        k = len(states)
+        times = [float(t)] * k if np.isscalar(t) else [float(v) for v in t]
+        goals = [None] * k if goals is None else list(goals)
+        collisions = [False] * k if in_collision is None else [bool(c) for c in in_collision]
+        lengths = {len(ranges_list), len(times), len(goals), len(collisions)}
+        if lengths != {k}:
+            raise ValueError(
+                f"evaluate_batch: {k} states but {len(ranges_list)} scans, {len(times)} times, "
+                f"{len(goals)} goals and {len(collisions)} collision flags"
+            )
+        odoms = [odometry_msg(s, tt) for s, tt in zip(states, times, strict=True)]
+        scans = [scan_msg(r, tt) for r, tt in zip(ranges_list, times, strict=True)]
+        return self._request(odoms, scans, goals, collisions)
+
+    def _request(
+        self,
+        odoms: list[Odometry],
+        scans: list[LaserScan],
+        goals: list[np.ndarray | None],
+        in_collision: list[bool],
+    ) -> list[Reward]:
+        """One service call for these states; their checked answers, in order."""
+        request = EvaluateBatch.Request(odom=odoms, scan=scans)
+        if any(g is not None for g in goals):
+            request.goal = [_point(g) for g in goals]
+            request.has_goal = [g is not None for g in goals]
+        if any(in_collision):
+            request.in_collision = in_collision
+        response = self._call(request, self.timeout)
+        if not len(response.empowerment) == len(response.reward) == len(odoms):
+            raise RuntimeError(
+                f"the cstep node answered {len(response.empowerment)} scores and "
+                f"{len(response.reward)} rewards for {len(odoms)} states"
+            )
+        pairs = zip(response.empowerment, response.reward, strict=True)
+        return [self._checked(e, r) for e, r in pairs]
+
+    def _checked(self, e: Empowerment | None, r: EmpoweredReward) -> Reward:
+        """The node's answer as a :class:`Reward`, after checking that it used this bridge's
+        safety coefficient and that the reward is finite."""
         if not math.isclose(r.safety_coefficient, self.safety_coefficient, rel_tol=1e-9):
             raise RuntimeError(
                 f"the cstep node uses safety_coefficient {r.safety_coefficient}, this bridge "

@@ -186,8 +186,53 @@ def test_empowered_env_gets_finite_rewards_matching_cstep_eval_and_the_topic_pat
     assert bridge.cstep is None  # the node was stopped
 
 
+def test_a_batch_gets_each_states_own_answer_and_a_reported_collision_the_floor(ros_domain):
+    """``evaluate_batch`` answers K states as K ``evaluate`` calls do, goals and collision flags
+    per state; ``in_collision=True`` gets the node's floor reward for that state."""
+    c = 0.5
+    bridge = RosBridge(domain_id=ros_domain, safety_coefficient=c, publish_sim_topics=False)
+    sim = DroneSim(arena(-0.9))
+    try:
+        states, scans = [], []
+        for k in range(4):  # four states along a short flight
+            for _ in range(5):
+                sim.step(sim.state().position + np.array([0.1, 0.05 * (k - 1.5), 0.0]))
+            states.append(sim.state())
+            scans.append(sim.scan())
+        goals = [GOAL, None, GOAL + 1.0, GOAL]
+        flags = [False, False, False, True]
+        times = [1.0, 2.0, 3.0, 4.0]
+        batch = bridge.evaluate_batch(states, scans, times, goals, flags)
+        assert len(batch) == 4
+        for state, ranges, t, goal, flag, answer in zip(
+            states, scans, times, goals, flags, batch, strict=True
+        ):
+            bridge.goal = None if goal is None else np.asarray(goal, dtype=float)
+            alone = bridge.evaluate(state, ranges, t, in_collision=flag)
+            assert (answer.reward, answer.empowerment, answer.valid, answer.status) == (
+                alone.reward,
+                alone.empowerment,
+                alone.valid,
+                alone.status,
+            )
+            assert answer.reward_msg.header.stamp.sec == int(t)
+        assert [a.valid for a in batch] == [True, True, True, False]
+        assert batch[1].task_reward == 1.0
+        collided = batch[3]
+        assert collided.status == "robot already in collision"
+        assert collided.empowerment == pytest.approx(math.log(1e-4), abs=1e-12)
+        task = math.exp(-float(np.linalg.norm(GOAL - states[3].position)))
+        assert collided.task_reward == pytest.approx(task, rel=1e-12)
+        assert collided.reward == pytest.approx(task * (math.log(c) + math.log(1e-4)), rel=1e-12)
+        with pytest.raises(ValueError, match="3 states but 2 scans"):
+            bridge.evaluate_batch(states[:3], scans[:2], 1.0)
+    finally:
+        sim.close()
+        bridge.close()
+
+
 def test_a_missing_node_is_a_clear_error_not_a_zero_reward(ros_domain):
-    with pytest.raises(RewardTimeout, match="no /cstep/evaluate service"):
+    with pytest.raises(RewardTimeout, match="no /cstep/evaluate_batch service"):
         RosBridge(domain_id=ros_domain, start_node=False, discovery_timeout=1.0)
 
 
@@ -201,7 +246,9 @@ def test_a_reply_that_does_not_come_times_out_and_a_late_one_is_not_taken_for_th
         first = bridge.evaluate(state, ranges, 1.0)
         os.kill(bridge.cstep.proc.pid, signal.SIGSTOP)  # the node hangs
         try:
-            with pytest.raises(RewardTimeout, match="no /cstep/evaluate reply .* within 1.0 s"):
+            with pytest.raises(
+                RewardTimeout, match="no /cstep/evaluate_batch reply .* within 1.0 s"
+            ):
                 bridge.evaluate(state, ranges * 0.5, 2.0)
         finally:
             os.kill(bridge.cstep.proc.pid, signal.SIGCONT)

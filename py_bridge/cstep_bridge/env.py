@@ -12,12 +12,20 @@ distance_to_goal (m), position (x, y, m).
 
 :class:`EmpoweredRewardEnv` holds what this env shares with the point maze
 (:mod:`~cstep_bridge.maze`): the choice of reward and the bridge to the node.
+
+An empowered env gets its reward in one of three ``reward_mode`` s. ``"service"`` (default) and
+``"topic"`` ask a node themselves, through the :class:`~cstep_bridge.ros_io.RosBridge` given or
+one of their own (with a private node). ``"deferred"`` asks none: ``step`` returns a NaN reward
+and leaves a :class:`RewardRequest` in ``info[REWARD_REQUEST]``, and a
+:class:`~cstep_bridge.batched_reward.BatchedReward` vec env wrapper scores the requests of all
+its envs in one node call per vector step and fills the rewards in (what the trainer does).
 """
 
 from __future__ import annotations
 
 import dataclasses
 import math
+from dataclasses import dataclass
 from typing import Any, ClassVar
 
 import gymnasium as gym
@@ -30,6 +38,39 @@ from .world import LIDAR_BEAMS, LIDAR_RANGE, clipped_ranges
 
 MAX_TILT = 0.9
 EPISODE_SECONDS = 30.0
+REWARD_MODES = ("service", "topic", "deferred")
+"""How an empowered env gets its reward (see the module docstring)."""
+REWARD_REQUEST = "cstep_reward_request"
+"""The ``info`` key of a deferred env's :class:`RewardRequest`."""
+
+
+@dataclass
+class RewardRequest:
+    """One state for the node to score, and how its answer becomes the env's reward.
+
+    A deferred env returns it in ``info[REWARD_REQUEST]`` (it pickles, so it crosses
+    SubprocVecEnv's pipes); the other modes make one for their own call.
+    """
+
+    state: DroneState
+    """The state after the step."""
+    ranges: np.ndarray
+    """The LiDAR ranges at that state."""
+    time: float
+    """Simulation time (s): the stamp of the odometry and scan."""
+    goal: np.ndarray
+    """The episode's goal, for the task reward."""
+    in_collision: bool = False
+    """Whether the simulator saw the robot in contact: the node then answers the floor without
+    rolling out."""
+
+    def finish(self, answer, info: dict[str, Any]) -> float:
+        """The env's reward from the node's ``answer`` (a :class:`~cstep_bridge.ros_io.Reward`)
+        for this state; adds its task_reward, empowerment and reward_valid to ``info``."""
+        info["task_reward"] = answer.task_reward
+        info["empowerment"] = answer.empowerment
+        info["reward_valid"] = answer.valid
+        return answer.reward
 
 
 class EmpoweredRewardEnv(gym.Env):
@@ -38,7 +79,8 @@ class EmpoweredRewardEnv(gym.Env):
 
     ``bridge``: a :class:`~cstep_bridge.ros_io.RosBridge` to use (not closed by this env);
     otherwise an empowered env starts its own bridge and private node, with ``node_params``
-    overriding the node's parameters, on first use.
+    overriding the node's parameters, on first use — except in ``reward_mode="deferred"``,
+    where it asks no node (see the module docstring).
     """
 
     def __init__(
@@ -52,21 +94,27 @@ class EmpoweredRewardEnv(gym.Env):
         reward_timeout: float,
         node_params: dict[str, str] | None = None,
     ) -> None:
-        """Checks ``safety_coefficient`` > 0 and keeps what starting a bridge needs."""
+        """Checks ``safety_coefficient`` > 0 and ``reward_mode``, and keeps what starting a
+        bridge needs."""
         super().__init__()
         if safety_coefficient <= 0:
             raise ValueError(f"safety_coefficient must be > 0, not {safety_coefficient}")
+        if reward_mode not in REWARD_MODES:
+            raise ValueError(f"reward_mode must be one of {REWARD_MODES}, not {reward_mode!r}")
         self.empowered = empowered
         self.safety_coefficient = float(safety_coefficient)
+        self.reward_mode = reward_mode
         self._bridge = bridge
         self._own_bridge = None
-        self._bridge_args = {
+        self.bridge_args = {
             "mode": reward_mode,
             "domain_id": domain_id,
             "safety_coefficient": self.safety_coefficient,
             "timeout": reward_timeout,
             "node_params": node_params,
         }
+        """The :class:`~cstep_bridge.ros_io.RosBridge` arguments of this env's own bridge (a
+        batching wrapper starts one bridge with them for all its envs)."""
 
     goal_fraction = 1.0
     """The curriculum level: drawn goals lie up to this share of the way from the start (1 = the
@@ -97,11 +145,18 @@ class EmpoweredRewardEnv(gym.Env):
     @property
     def bridge(self):
         """The bridge given, else this env's own (started here, with its node, on first use)."""
+        if self.reward_mode == "deferred":
+            raise RuntimeError("a deferred env asks no node: its BatchedReward wrapper does")
         if self._bridge is None and self._own_bridge is None:
             from .ros_io import RosBridge  # rclpy only when empowered
 
-            self._own_bridge = RosBridge(**self._bridge_args)
+            self._own_bridge = RosBridge(**self.bridge_args)
         return self._bridge or self._own_bridge
+
+    def _share_goal(self, goal: np.ndarray) -> None:
+        """Tells the bridge this episode's goal (a deferred env sends it with each request)."""
+        if self.empowered and self.reward_mode != "deferred":
+            self.bridge.set_goal(goal)
 
     def _outcome(self, state: DroneState, collision: bool) -> tuple[np.ndarray, float, dict]:
         """After a step: the scan, the reward and the ``info`` of ``state`` (success updated)."""
@@ -117,14 +172,15 @@ class EmpoweredRewardEnv(gym.Env):
     ) -> float:
         """The reward of ``state`` (``distance`` from the goal) with scan ``ranges`` at sim time
         ``t``; an empowered env adds the node's task_reward, empowerment and reward_valid to
-        ``info``."""
+        ``info``, or when deferred returns NaN and leaves the :class:`RewardRequest` there."""
         if not self.empowered:
             return math.exp(-distance)
-        answer = self.bridge.evaluate(state, ranges, t)
-        info["task_reward"] = answer.task_reward
-        info["empowerment"] = answer.empowerment
-        info["reward_valid"] = answer.valid
-        return answer.reward
+        request = RewardRequest(state, ranges, t, self.sim.goal)
+        if self.reward_mode == "deferred":
+            info[REWARD_REQUEST] = request
+            return math.nan
+        answer = self.bridge.evaluate(state, ranges, t, in_collision=request.in_collision)
+        return request.finish(answer, info)
 
     def close(self) -> None:
         """Stops this env's own bridge and node, if it started them."""
@@ -153,9 +209,9 @@ class CStepDroneEnv(EmpoweredRewardEnv):
         render_mode: str | None = None,
         reward_timeout: float = 5.0,
     ) -> None:
-        """``bridge``: see :class:`EmpoweredRewardEnv`; an empowered env without one starts its
-        own on first reset. ``arena``: a fixed configuration; None draws one per episode from the
-        reset seed."""
+        """``bridge``, ``reward_mode``: see :class:`EmpoweredRewardEnv`; an empowered env
+        without a bridge starts its own on first reset (unless deferred). ``arena``: a fixed
+        configuration; None draws one per episode from the reset seed."""
         super().__init__(
             empowered,
             safety_coefficient,
@@ -211,8 +267,7 @@ class CStepDroneEnv(EmpoweredRewardEnv):
         state = self.sim.reset(arena)
         self.steps = 0
         self.success = False
-        if self.empowered:
-            self.bridge.set_goal(arena.goal)
+        self._share_goal(arena.goal)
         ranges = self.sim.scan(state)
         return self._observe(state, ranges), self._info(state, False)
 

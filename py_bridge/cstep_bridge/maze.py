@@ -356,8 +356,7 @@ class CStepMazeEnv(EmpoweredRewardEnv):
         state = self.sim.reset(config)
         self.steps = 0
         self.success = False
-        if self.empowered:
-            self.bridge.set_goal(self.sim.goal)
+        self._share_goal(self.sim.goal)
         return self._observe(state, self.sim.scan(state)), self._info(state, False)
 
     def step(self, action):

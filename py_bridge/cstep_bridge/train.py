@@ -9,8 +9,10 @@ units (policy and value each), n_steps 2048, batch 64, γ 0.99, GAE λ 0.95, cli
 agents learn the task (``docs/results/protocol.md``). Single options (``--gamma``, ``--net``, ...)
 and ``--hyperparams KEY=VALUE`` override entries. Every agent of a comparison trains with the same
 protocol: the levers in it (normalisation, curriculum, model selection, ...) apply to all alike.
-An empowered agent's environments each start a private ``cstep node`` on their own ROS domain
-(localhost only), so ``--n-envs`` parallel environments never hear each other.
+An empowered agent's environments share one private ``cstep node`` on a ROS domain of their own
+(localhost only), which scores all of them in one service call per vector step
+(:mod:`~cstep_bridge.batched_reward`); with ``--reward-mode topic`` each environment starts a
+node of its own instead.
 
 The run directory ``--out`` holds:
 
@@ -23,7 +25,8 @@ The run directory ``--out`` holds:
   (:mod:`~cstep_bridge.selection`); ``curriculum.json`` when it has a curriculum.
 - ``tb/``: TensorBoard logs (``tensorboard --logdir DIR/tb``): SB3's losses and episode rewards,
   plus ``cstep/`` success and collision rates, mean empowerment and mean obstacle distance.
-- ``monitor/``: one CSV per environment with every episode's reward, length, success and collision.
+- ``monitor/``: every episode's reward, length, success and collision: one CSV per environment, or
+  one for them all (``batched.monitor.csv``) when a node scores them together.
 - ``training.png``: episode reward and success rate over the training steps.
 """
 
@@ -377,6 +380,7 @@ def train(args: argparse.Namespace) -> Path:
     from stable_baselines3.common.env_util import make_vec_env
     from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv, VecNormalize
 
+    from .batched_reward import make_batched_vec_env
     from .plots import training_curve
 
     out: Path = args.out
@@ -404,14 +408,26 @@ def train(args: argparse.Namespace) -> Path:
 
     (out / "checkpoints").mkdir(exist_ok=True)
     torch.set_num_threads(args.torch_threads)
-    vec_env = make_vec_env(
-        env_factory(settings),
-        n_envs=args.n_envs,
-        seed=settings["seed"],
-        monitor_dir=str(out / "monitor"),
-        monitor_kwargs={"info_keywords": INFO_KEYWORDS, "override_existing": not args.resume},
-        vec_env_cls=SubprocVecEnv if args.vec_env == "subproc" else DummyVecEnv,
-    )
+    vec_env_cls = SubprocVecEnv if args.vec_env == "subproc" else DummyVecEnv
+    if settings["agent"] == "empowered" and settings["reward_mode"] == "service":
+        vec_env = make_batched_vec_env(
+            env_factory({**settings, "reward_mode": "deferred"}),
+            args.n_envs,
+            seed=settings["seed"],
+            vec_env_cls=vec_env_cls,
+            monitor_dir=out / "monitor",
+            info_keywords=INFO_KEYWORDS,
+            override_existing=not args.resume,
+        )
+    else:
+        vec_env = make_vec_env(
+            env_factory(settings),
+            n_envs=args.n_envs,
+            seed=settings["seed"],
+            monitor_dir=str(out / "monitor"),
+            monitor_kwargs={"info_keywords": INFO_KEYWORDS, "override_existing": not args.resume},
+            vec_env_cls=vec_env_cls,
+        )
     if settings["norm_obs"] or settings["norm_reward"]:
         stats = stats_path(resume_from) if resume_from is not None else None
         if stats is not None and stats.exists():

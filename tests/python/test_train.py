@@ -1,5 +1,5 @@
 """The trainer and the evaluation CLI, end to end on tiny runs: real PyBullet, real SB3 PPO, and for
-the empowered agent real `cstep node`s over real DDS (each env its own private domain)."""
+the empowered agent a real `cstep node` over real DDS (on a private domain, shared by its envs)."""
 
 import json
 import os
@@ -90,7 +90,7 @@ def test_a_second_run_into_the_same_directory_is_refused(drone_run):
     assert "already holds a run" in proc.stderr
 
 
-def test_empowered_training_with_two_envs_each_with_its_own_node(tmp_path):
+def test_empowered_training_with_two_envs_sharing_one_node(tmp_path):
     out = tmp_path / "emp"
     proc = run(
         "train",
@@ -115,6 +115,8 @@ def test_empowered_training_with_two_envs_each_with_its_own_node(tmp_path):
     assert np.isfinite(empowerment)
     assert PPO.load(out / "model.zip", device="cpu").num_timesteps == 128
     assert json.loads((out / "run.json").read_text())["c"] == 0.5
+    # One batched vector env, so one episode log (VecMonitor's) instead of one per env.
+    assert [p.name for p in (out / "monitor").iterdir()] == ["batched.monitor.csv"]
 
 
 def test_agents_with_the_same_settings_are_told_apart_by_their_seed():

@@ -21,7 +21,8 @@ VENV_ENV := env -u PYTHONPATH -u AMENT_PREFIX_PATH -u COLCON_PREFIX_PATH \
 ROS_BUILD_ENV := $(VENV_ENV) \
 	AMENT_PREFIX_PATH=$(VENV_ABS) CMAKE_PREFIX_PATH=$(VENV_ABS) PATH=$(VENV_ABS)/bin:$$PATH
 
-.PHONY: test lint lint-rust lint-python test-rust test-python venv bench bench-latency bench-steps
+.PHONY: test lint lint-rust lint-python test-rust test-python venv bench bench-latency bench-steps \
+	bench-train
 
 test: lint test-rust test-python
 
@@ -91,3 +92,9 @@ bench-latency: $(MSGS_STAMP)
 bench-steps: $(MSGS_STAMP)
 	$(CARGO) build --release --quiet
 	$(VENV_ENV) CSTEP_BIN=$(abspath $(TARGET_DIR))/release/cstep $(VPY) benches/python/bench_steps.py
+
+# PPO training steps per second over the whole loop, unempowered vs empowered (tuned protocol,
+# two envs, alternating rounds); BENCH_TRAIN_ARGS adds options (--rounds, --steps, --env, ...).
+bench-train: $(MSGS_STAMP)
+	$(CARGO) build --release --quiet
+	$(VENV_ENV) CSTEP_BIN=$(abspath $(TARGET_DIR))/release/cstep $(VPY) benches/python/bench_train.py $(BENCH_TRAIN_ARGS)

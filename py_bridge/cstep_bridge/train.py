@@ -229,6 +229,43 @@ def env_factory(settings: dict[str, Any]):
     return build
 
 
+def training_vec_env(
+    settings: dict[str, Any],
+    n_envs: int,
+    vec_env: str,
+    monitor_dir: Path | None,
+    override_existing: bool = True,
+):
+    """The run's ``n_envs`` environments, in processes of their own (``vec_env="subproc"``) or
+    in this one (``"dummy"``), each episode logged to ``monitor_dir`` (None: not written). An
+    empowered agent in service mode gets one node for all its envs and one call per vector step
+    (:mod:`~cstep_bridge.batched_reward`); otherwise each env is SB3's usual Monitor-wrapped one."""
+    from stable_baselines3.common.env_util import make_vec_env
+    from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv
+
+    from .batched_reward import make_batched_vec_env
+
+    vec_env_cls = SubprocVecEnv if vec_env == "subproc" else DummyVecEnv
+    if settings["agent"] == "empowered" and settings["reward_mode"] == "service":
+        return make_batched_vec_env(
+            env_factory({**settings, "reward_mode": "deferred"}),
+            n_envs,
+            seed=settings["seed"],
+            vec_env_cls=vec_env_cls,
+            monitor_dir=monitor_dir,
+            info_keywords=INFO_KEYWORDS,
+            override_existing=override_existing,
+        )
+    return make_vec_env(
+        env_factory(settings),
+        n_envs=n_envs,
+        seed=settings["seed"],
+        monitor_dir=None if monitor_dir is None else str(monitor_dir),
+        monitor_kwargs={"info_keywords": INFO_KEYWORDS, "override_existing": override_existing},
+        vec_env_cls=vec_env_cls,
+    )
+
+
 def _callbacks(out: Path, settings: dict[str, Any]):
     from stable_baselines3.common.callbacks import BaseCallback, CallbackList
     from stable_baselines3.common.vec_env import VecNormalize
@@ -377,10 +414,8 @@ def train(args: argparse.Namespace) -> Path:
     """Runs (or resumes) the training described by ``args``; returns the final model's path."""
     import torch
     from stable_baselines3 import PPO
-    from stable_baselines3.common.env_util import make_vec_env
-    from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv, VecNormalize
+    from stable_baselines3.common.vec_env import VecNormalize
 
-    from .batched_reward import make_batched_vec_env
     from .plots import training_curve
 
     out: Path = args.out
@@ -408,26 +443,9 @@ def train(args: argparse.Namespace) -> Path:
 
     (out / "checkpoints").mkdir(exist_ok=True)
     torch.set_num_threads(args.torch_threads)
-    vec_env_cls = SubprocVecEnv if args.vec_env == "subproc" else DummyVecEnv
-    if settings["agent"] == "empowered" and settings["reward_mode"] == "service":
-        vec_env = make_batched_vec_env(
-            env_factory({**settings, "reward_mode": "deferred"}),
-            args.n_envs,
-            seed=settings["seed"],
-            vec_env_cls=vec_env_cls,
-            monitor_dir=out / "monitor",
-            info_keywords=INFO_KEYWORDS,
-            override_existing=not args.resume,
-        )
-    else:
-        vec_env = make_vec_env(
-            env_factory(settings),
-            n_envs=args.n_envs,
-            seed=settings["seed"],
-            monitor_dir=str(out / "monitor"),
-            monitor_kwargs={"info_keywords": INFO_KEYWORDS, "override_existing": not args.resume},
-            vec_env_cls=vec_env_cls,
-        )
+    vec_env = training_vec_env(
+        settings, args.n_envs, args.vec_env, out / "monitor", override_existing=not args.resume
+    )
     if settings["norm_obs"] or settings["norm_reward"]:
         stats = stats_path(resume_from) if resume_from is not None else None
         if stats is not None and stats.exists():

@@ -3,12 +3,13 @@
 The process (and so the `cstep node` each empowered env starts, which inherits it) is pinned to
 one CPU. Each run steps the env ``--steps`` times with the same seeded random actions in the same
 configuration (resetting, untimed, when an episode ends); the empowered step adds the odometry and
-scan messages, the `/cstep/evaluate` round trip over DDS (localhost, a private domain) and the
-node's C-STEP evaluation. Prints the median over ``--runs`` runs of the mean step time and the
-overhead of the empowered reward and, to show where that overhead goes, the empowered step once
-more with the bridge's three simulation-topic publishes (/odom, /scan, /clock: for observers
-only in service mode) turned off, and the reward call alone (``RosBridge.evaluate`` on the
-state the env is in: messages, publishes, the round trip and the node's evaluation).
+scan messages, the service round trip over DDS (localhost, a private domain) and the node's
+C-STEP evaluation. Prints the median over ``--runs`` runs of the mean step time and the overhead
+of the empowered reward and, to show where that overhead goes, the empowered step once more with
+the bridge's three simulation-topic publishes (/odom, /scan, /clock: for observers only in
+service mode) turned off (``publish_sim_topics=False``, as the trainer runs), and the reward call
+alone (``RosBridge.evaluate`` on the state the env is in: messages, publishes, the round trip and
+the node's evaluation). ``make bench-train`` measures the whole training loop instead.
 """
 
 import argparse
@@ -68,9 +69,7 @@ def main() -> int:
             try:
                 step_time_ms(env, 30, seed=99)  # warm-up: node start, discovery, caches
                 if label == "  no sim topics":
-                    bridge = env.unwrapped.bridge
-                    for publisher in (bridge.odom_pub, bridge.scan_pub, bridge.clock_pub):
-                        publisher.publish = lambda msg: None
+                    env.unwrapped.bridge.publish_sim_topics = False
                 ms = statistics.median(
                     step_time_ms(env, args.steps, seed=r) for r in range(args.runs)
                 )

@@ -74,7 +74,7 @@ $(MSGS_STAMP): $(PY_STAMP) $(MSG_SOURCES) Makefile
 	@echo "==> cstep_msgs: installing into $(VENV)/"
 	@$(ROS_BUILD_ENV) $(VENV)/bin/cmake --install $(MSGS_BUILD) >> $(MSGS_BUILD)/make-venv.log 2>&1 \
 		|| { cat $(MSGS_BUILD)/make-venv.log; exit 1; }
-	@$(VENV_ENV) $(VPY) -c "from cstep_msgs.srv import Evaluate; from cstep_msgs.msg import Empowerment, EmpoweredReward" \
+	@$(VENV_ENV) $(VPY) -c "from cstep_msgs.srv import Evaluate, EvaluateBatch; from cstep_msgs.msg import Empowerment, EmpoweredReward" \
 		|| { echo "cstep_msgs was built but does not import"; exit 1; }
 	@echo "==> cstep_msgs: ready (import cstep_msgs works)"
 	@touch $@

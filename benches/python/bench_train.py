@@ -11,8 +11,7 @@ the agents (unempowered first in even rounds, empowered first in odd ones) so th
 same machine; prints each run, then per agent the median steps/s over ``--rounds`` rounds with
 their range, and the ratio empowered / unempowered of the medians (and its range over rounds).
 
-The protocol's ``collision_value`` is set to ``none`` for both agents (``--hyperparams`` may set
-it back): what a collision pays changes no step's cost but one reward call per episode.
+``--hyperparams`` overrides protocol entries as the trainer's option does.
 """
 
 import argparse
@@ -75,9 +74,7 @@ def main() -> int:
     ap.add_argument("--rounds", type=int, default=3)
     ap.add_argument("--steps", type=int, default=4096, help="timed steps per run")
     ap.add_argument("--warmup", type=int, default=1024, help="untimed steps before them")
-    ap.add_argument(
-        "--hyperparams", nargs="*", default=["collision_value=none"], metavar="KEY=VALUE"
-    )
+    ap.add_argument("--hyperparams", nargs="*", default=[], metavar="KEY=VALUE")
     args = ap.parse_args()
     args.vec_env = args.vec_env or ("subproc" if args.n_envs > 1 else "dummy")
     os.environ["ROS_AUTOMATIC_DISCOVERY_RANGE"] = "LOCALHOST"

@@ -6,9 +6,11 @@ roll/pitch/yaw (3, rad), body angular velocity (3, rad/s), the 180 LiDAR ranges 
 the current position at the fixed 1 m altitude and tracked by the PID for one 30 Hz control step.
 Reward: ``exp(−‖p − goal‖)`` (``empowered=False``) or the node's empowered reward
 ``exp(−‖p − goal‖) · log(c · λ(R_free))`` for exactly this state. Terminates on contact or tilt
-> 0.9 rad; truncates at 30 s. ``info``: success (came within ``success_radius`` of the goal),
-collision, time, min_obstacle_distance (centre to nearest wall or block face, m),
-distance_to_goal (m), position (x, y, m).
+> 0.9 rad; truncates at 30 s. What a collision costs an empowered agent is ``collision_value``
+(:mod:`~cstep_bridge.collision`): nothing more (``"none"``, the paper as written) or the node's
+floor reward held for the steps the episode had left (``"floor"``). ``info``: success (came
+within ``success_radius`` of the goal), collision, time, min_obstacle_distance (centre to
+nearest wall or block face, m), distance_to_goal (m), position (x, y, m).
 
 :class:`EmpoweredRewardEnv` holds what this env shares with the point maze
 (:mod:`~cstep_bridge.maze`): the choice of reward and the bridge to the node.
@@ -32,6 +34,7 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
+from .collision import COLLISION_VALUES, held_return
 from .curriculum import partway_goal, training_fraction
 from .sim import CONTROL_HZ, Arena, DroneSim, DroneState
 from .world import LIDAR_BEAMS, LIDAR_RANGE, clipped_ranges
@@ -63,14 +66,20 @@ class RewardRequest:
     in_collision: bool = False
     """Whether the simulator saw the robot in contact: the node then answers the floor without
     rolling out."""
+    held_steps: int = 1
+    """For how many steps the answer is paid: 1, or under ``collision_value="floor"`` the steps
+    the episode had left when it ended in a collision (see :mod:`~cstep_bridge.collision`)."""
+    gamma: float = 1.0
+    """The discount of those held steps."""
 
     def finish(self, answer, info: dict[str, Any]) -> float:
         """The env's reward from the node's ``answer`` (a :class:`~cstep_bridge.ros_io.Reward`)
-        for this state; adds its task_reward, empowerment and reward_valid to ``info``."""
+        for this state, held for :attr:`held_steps`; adds its task_reward, empowerment and
+        reward_valid to ``info``."""
         info["task_reward"] = answer.task_reward
         info["empowerment"] = answer.empowerment
         info["reward_valid"] = answer.valid
-        return answer.reward
+        return held_return(answer.reward, self.held_steps, self.gamma)
 
 
 class EmpoweredRewardEnv(gym.Env):
@@ -93,14 +102,26 @@ class EmpoweredRewardEnv(gym.Env):
         domain_id: int | None,
         reward_timeout: float,
         node_params: dict[str, str] | None = None,
+        collision_value: str = "none",
+        gamma: float = 0.99,
     ) -> None:
-        """Checks ``safety_coefficient`` > 0 and ``reward_mode``, and keeps what starting a
-        bridge needs."""
+        """Checks ``safety_coefficient`` > 0, ``reward_mode`` and ``collision_value``, and keeps
+        what starting a bridge needs. ``collision_value`` and ``gamma``: what a collision is
+        worth to an empowered agent (:mod:`~cstep_bridge.collision`; ``gamma`` only discounts
+        the held floor, it should be the trainer's)."""
         super().__init__()
         if safety_coefficient <= 0:
             raise ValueError(f"safety_coefficient must be > 0, not {safety_coefficient}")
         if reward_mode not in REWARD_MODES:
             raise ValueError(f"reward_mode must be one of {REWARD_MODES}, not {reward_mode!r}")
+        if collision_value not in COLLISION_VALUES:
+            raise ValueError(
+                f"collision_value must be one of {COLLISION_VALUES}, not {collision_value!r}"
+            )
+        if not 0 < gamma <= 1:
+            raise ValueError(f"gamma must be in (0, 1], not {gamma}")
+        self.collision_value = collision_value
+        self.gamma = float(gamma)
         self.empowered = empowered
         self.safety_coefficient = float(safety_coefficient)
         self.reward_mode = reward_mode
@@ -176,6 +197,10 @@ class EmpoweredRewardEnv(gym.Env):
         if not self.empowered:
             return math.exp(-distance)
         request = RewardRequest(state, ranges, t, self.sim.goal)
+        if info["collision"] and self.collision_value == "floor":
+            request.in_collision = True
+            request.held_steps = self.max_steps - self.steps + 1  # this step and those left
+            request.gamma = self.gamma
         if self.reward_mode == "deferred":
             info[REWARD_REQUEST] = request
             return math.nan
@@ -208,6 +233,8 @@ class CStepDroneEnv(EmpoweredRewardEnv):
         arena: Arena | None = None,
         render_mode: str | None = None,
         reward_timeout: float = 5.0,
+        collision_value: str = "none",
+        gamma: float = 0.99,
     ) -> None:
         """``bridge``, ``reward_mode``: see :class:`EmpoweredRewardEnv`; an empowered env
         without a bridge starts its own on first reset (unless deferred). ``arena``: a fixed
@@ -219,6 +246,8 @@ class CStepDroneEnv(EmpoweredRewardEnv):
             reward_mode=reward_mode,
             domain_id=domain_id,
             reward_timeout=reward_timeout,
+            collision_value=collision_value,
+            gamma=gamma,
         )
         self.max_offset = max_offset
         self.max_steps = round(episode_seconds * CONTROL_HZ)

@@ -301,6 +301,8 @@ class CStepMazeEnv(EmpoweredRewardEnv):
         config: MazeConfig | None = None,
         episode_steps: int = EPISODE_STEPS,
         success_radius: float = SUCCESS_RADIUS,
+        collision_value: str = "none",
+        gamma: float = 0.99,
     ) -> None:
         """``bridge``: see :class:`~cstep_bridge.env.EmpoweredRewardEnv`; it must serve a node
         started with :data:`NODE_PARAMS`, as the env's own bridge does. ``config``: a fixed start
@@ -313,6 +315,8 @@ class CStepMazeEnv(EmpoweredRewardEnv):
             domain_id=domain_id,
             reward_timeout=reward_timeout,
             node_params=NODE_PARAMS,
+            collision_value=collision_value,
+            gamma=gamma,
         )
         self.max_steps = episode_steps
         self.success_radius = success_radius

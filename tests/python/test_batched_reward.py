@@ -14,16 +14,21 @@ from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv
 SEED = 5
 
 
-def deferred(name: str):
+def deferred(name: str, **kwargs):
     """A constructor of a deferred empowered ``name`` env (c = 0.5)."""
-    return lambda: make_env(name, empowered=True, safety_coefficient=0.5, reward_mode="deferred")
+    return lambda: make_env(
+        name, empowered=True, safety_coefficient=0.5, reward_mode="deferred", **kwargs
+    )
 
 
-def compare_with_own_nodes(name: str, venv, actions: np.ndarray) -> list[dict]:
-    """Steps ``venv`` and, beside it, one env per slot with a node of its own through the same
-    actions from the same seeds; asserts equal observations, rewards and infos; returns the
-    batched infos of every step."""
-    own = [make_env(name, empowered=True, safety_coefficient=0.5) for _ in range(venv.num_envs)]
+def compare_with_own_nodes(name: str, venv, actions: np.ndarray, **kwargs) -> list[dict]:
+    """Steps ``venv`` and, beside it, one env per slot with a node of its own (``kwargs`` to its
+    constructor) through the same actions from the same seeds; asserts equal observations,
+    rewards and infos; returns the batched infos of every step."""
+    own = [
+        make_env(name, empowered=True, safety_coefficient=0.5, **kwargs)
+        for _ in range(venv.num_envs)
+    ]
     seen = []
     try:
         obs = venv.reset()
@@ -84,6 +89,20 @@ def test_batched_maze_envs_in_subprocesses_share_one_node_with_the_mazes_paramet
     returns = [float(line.split(",")[0]) for line in lines[2:]]
     assert returns == pytest.approx([e["r"] for e in episodes], abs=1e-5)
     assert all(math.isfinite(r) for r in returns)
+
+
+def test_batched_collisions_pay_the_held_floor_as_an_env_with_its_own_node(ros_domain):
+    """collision_value="floor" through the batch: the collided state flagged to the node, its
+    floor reward held for the steps left, as a lone env computes it."""
+    floor = {"collision_value": "floor", "gamma": 0.97}
+    venv = make_batched_vec_env(deferred("maze", **floor), 2, seed=SEED, vec_env_cls=DummyVecEnv)
+    try:
+        actions = np.tile(np.float32([[-1.0, -1.0], [1.0, -1.0]]), (40, 1, 1))  # into walls
+        infos = compare_with_own_nodes("maze", venv, actions, **floor)
+        crashes = [i for i in infos if i["collision"]]
+        assert len(crashes) >= 2 and not any(i["reward_valid"] for i in crashes)
+    finally:
+        venv.close()
 
 
 def test_a_deferred_env_leaves_its_request_and_asks_no_node():

@@ -8,6 +8,7 @@ import pybullet as p
 import pytest
 from cstep_bridge.maze import (
     BALL_RADIUS,
+    EPISODE_STEPS,
     LAYOUT,
     MAX_ACCELERATION,
     NODE_PARAMS,
@@ -173,3 +174,45 @@ def test_empowered_reward_is_lower_in_the_narrow_corridor_and_matches_cstep_eval
         assert offline["horizon"] == float(NODE_PARAMS["horizon"])
     finally:
         env.close()
+
+
+def crash(env, steps: int = 30):
+    """Pushes the ball left from the bottom-left start into the wall x = −3; the last step."""
+    env.reset(options={"config": MazeConfig((-2.5, -4.0), GOAL)})
+    for k in range(1, steps + 1):
+        out = env.step(np.array([-1.0, 0.0]))
+        if out[2] or out[3]:
+            return k, out
+    raise AssertionError("no collision")
+
+
+def test_collision_value_floor_pays_the_floor_for_the_steps_left(ros_domain):
+    """A collision under ``floor`` pays the node's floor reward (λ = 0 clamped: task reward ×
+    (ln c + floor)) for this step and every step left, discounted; under ``none`` only the
+    node's reward of the state reached. Both through one real point-mass node."""
+    from cstep_bridge.collision import held_return
+    from cstep_bridge.ros_io import RosBridge
+
+    c, gamma = 0.5, 0.97
+    bridge = RosBridge(domain_id=ros_domain, safety_coefficient=c, node_params=NODE_PARAMS)
+    floor = CStepMazeEnv(
+        empowered=True, safety_coefficient=c, bridge=bridge, collision_value="floor", gamma=gamma
+    )
+    none = CStepMazeEnv(empowered=True, safety_coefficient=c, bridge=bridge)
+    try:
+        k, (_, paid, terminated, _, info) = crash(floor)
+        assert terminated and info["collision"] and not info["reward_valid"]
+        assert info["empowerment"] == pytest.approx(math.log(1e-4), abs=1e-9)  # the floor
+        per_step = info["task_reward"] * (math.log(c) + info["empowerment"])
+        assert paid == pytest.approx(held_return(per_step, EPISODE_STEPS - k + 1, gamma))
+        assert paid < 10 * per_step < 0  # ~1/(1 − γ) ≈ 33 steps' worth, not 1
+        k2, (_, plain, terminated, _, info) = crash(none)
+        assert (k2, terminated) == (k, True)
+        assert plain == pytest.approx(info["task_reward"] * (math.log(c) + info["empowerment"]))
+        assert plain > paid
+    finally:
+        floor.close()
+        none.close()
+        bridge.close()
+    with pytest.raises(ValueError, match="collision_value"):
+        CStepMazeEnv(empowered=False, collision_value="sometimes")

@@ -68,6 +68,8 @@ SETTING_NAMES = (
     "target_kl",
     "use_sde",
     "sde_sample_freq",
+    "squash_output",
+    "use_expln",
     "norm_obs",
     "norm_reward",
     "collision_value",
@@ -75,7 +77,14 @@ SETTING_NAMES = (
     "validation",
 )
 """The run settings a protocol section becomes (:func:`settings`), in ``run.json``'s order."""
-_POLICY_KEYS = {"net_arch", "log_std_init", "activation_fn", "ortho_init"}
+_POLICY_KEYS = {
+    "net_arch",
+    "log_std_init",
+    "activation_fn",
+    "ortho_init",
+    "squash_output",
+    "use_expln",
+}
 
 
 def load(name: str, env: str) -> dict[str, Any]:
@@ -126,6 +135,8 @@ def settings(hyper: dict[str, Any]) -> dict[str, Any]:
         "target_kl": None if hyper["target_kl"] is None else float(hyper["target_kl"]),
         "use_sde": bool(hyper["use_sde"]),
         "sde_sample_freq": int(hyper["sde_sample_freq"]),
+        "squash_output": bool(policy.get("squash_output", False)),
+        "use_expln": bool(policy.get("use_expln", False)),
         "norm_obs": bool(normalize.get("norm_obs", False)),
         "norm_reward": bool(normalize.get("norm_reward", False)),
         "collision_value": str(hyper["collision_value"]),
@@ -144,6 +155,9 @@ def check(s: dict[str, Any]) -> None:
         raise ValueError(
             f"collision_value must be one of {COLLISION_VALUES}, not {s['collision_value']!r}"
         )
+    for name in ("squash_output", "use_expln"):
+        if s.get(name) and not s["use_sde"]:
+            raise ValueError(f"policy_kwargs.{name} needs use_sde (SB3 has it for gSDE only)")
     if s["lr_schedule"] not in ("constant", "linear"):
         raise ValueError(f"lr_schedule must be constant or linear, not {s['lr_schedule']!r}")
     for name in ("learning_rate", "n_steps", "batch_size", "n_epochs", "clip_range"):

@@ -217,9 +217,8 @@ def env_factory(settings: dict[str, Any]):
     kwargs: dict[str, Any] = {}
     if empowered:
         kwargs["reward_mode"] = settings["reward_mode"]
-        if settings["collision_value"] != "none":
-            kwargs["collision_value"] = settings["collision_value"]
-            kwargs["gamma"] = settings["gamma"]
+        kwargs["collision_value"] = settings["collision_value"]
+        kwargs["gamma"] = settings["gamma"]
 
     def build():
         return make_env(
@@ -361,6 +360,9 @@ def _policy_kwargs(settings: dict[str, Any]) -> dict[str, Any]:
         "activation_fn": {"tanh": torch.nn.Tanh, "relu": torch.nn.ReLU}[settings["activation"]],
         "log_std_init": settings["log_std_init"],
         "ortho_init": settings["ortho_init"],
+        # gSDE's tanh squashing and its bounded std; absent from runs started before them
+        "squash_output": settings.get("squash_output", False),
+        "use_expln": settings.get("use_expln", False),
     }
 
 

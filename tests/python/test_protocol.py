@@ -82,12 +82,53 @@ def test_a_bad_hyperparameter_is_refused_with_its_name(bad, message, capsys):
     assert message in capsys.readouterr().err
 
 
+def test_squashed_gsde_builds_a_policy_whose_actions_stay_in_the_box(tmp_path):
+    args = parse_args(
+        [
+            "--protocol",
+            "tuned",
+            "--out",
+            "x",
+            "--hyperparams",
+            "use_sde=true",
+            "sde_sample_freq=8",
+            "n_steps=64",
+            "batch_size=64",
+            "policy_kwargs={squash_output: true, use_expln: true}",
+        ]
+    )
+    s = run_settings(args)
+    assert s["squash_output"] and s["use_expln"] and s["net"] == [256, 256]  # others merged
+    venv = make_vec_env(lambda: make_env("drone", empowered=False), n_envs=1, seed=3)
+    try:
+        model = build_model(s, venv)
+        assert model.policy.squash_output and model.policy.action_dist.use_expln
+        model.learn(64)  # samples actions through the squashed distribution
+        obs = venv.reset()
+        actions = np.array([model.predict(obs, deterministic=False)[0] for _ in range(50)])
+        assert np.abs(actions).max() <= 1.0 and actions.std() > 0.05
+    finally:
+        venv.close()
+
+
 def test_bad_settings_are_named():
     args = parse_args(["--out", "x", "--hyperparams", "collision_value=sometimes"])
     with pytest.raises(ValueError, match="collision_value"):
         run_settings(args)
     args = parse_args(["--out", "x", "--hyperparams", "curriculum={levels: [0.5]}"])
     with pytest.raises(ValueError, match="end at 1"):
+        run_settings(args)
+    args = parse_args(
+        [
+            "--protocol",
+            "tuned",
+            "--out",
+            "x",
+            "--hyperparams",
+            "policy_kwargs={squash_output: true}",
+        ]
+    )
+    with pytest.raises(ValueError, match="squash_output needs use_sde"):
         run_settings(args)
 
 

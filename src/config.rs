@@ -9,8 +9,9 @@ use std::path::{Path, PathBuf};
 
 use serde_norway::Value;
 
+use crate::model::CommandAxes;
 use crate::occupancy::UnknownSpace;
-use crate::sampling::SamplerKind;
+use crate::sampling::{Controls, SamplerKind, CONTROL_SAMPLE_BUDGET_BYTES};
 use crate::volume::{EstimatorKind, VolumeDims};
 
 /// The node name whose parameters are read when none is given.
@@ -364,6 +365,8 @@ impl Settings {
         let models = ["quadrotor", "point_mass"];
         let model = required("model", named(set, "model", ModelKind::from_name, &models)?)?;
         let horizon = required("horizon", positive(set, "horizon")?)?;
+        let count_source = |name: &str| set.values.get(name).map(|(_, s)| s.clone());
+        let sample_source = [count_source("trajectories"), count_source("steps")];
         let trajectories = required(
             "trajectories",
             bounded_count(set, "trajectories", 1, MAX_TRAJECTORIES)?,
@@ -390,6 +393,7 @@ impl Settings {
                 &["2", "3"],
             )?,
         )?;
+        within_budget(trajectories, steps, volume_dims, sample_source)?;
         let estimators: Vec<_> = EstimatorKind::ALL.iter().map(|e| e.name()).collect();
         let estimator = required(
             "estimator",
@@ -442,6 +446,35 @@ fn required<T>(name: &str, value: Option<T>) -> Result<T, ConfigError> {
             format!("'{name}' must be set (the built-in config sets it; a file or -p cleared it)"),
         )
     })
+}
+
+/// Refuses `trajectories × steps` whose control sample would exceed
+/// [`CONTROL_SAMPLE_BUDGET_BYTES`], naming the values, the size and the budget; `sources` are
+/// where the two counts were set.
+fn within_budget(
+    trajectories: usize,
+    steps: usize,
+    volume_dims: VolumeDims,
+    sources: [Option<String>; 2],
+) -> Result<(), ConfigError> {
+    let axes = CommandAxes::for_volume_dims(volume_dims);
+    let bytes = Controls::bytes(trajectories, steps, axes);
+    if bytes <= CONTROL_SAMPLE_BUDGET_BYTES {
+        return Ok(());
+    }
+    let mut sources: Vec<String> = sources.into_iter().flatten().collect();
+    sources.dedup();
+    let mib = |b: u64| b as f64 / f64::from(1 << 20);
+    Err(ConfigError::new(
+        &sources.join(" and "),
+        format!(
+            "'trajectories' × 'steps' ({trajectories} × {steps}, {} command axes) needs \
+             {:.0} MiB of control samples, more than the {:.0} MiB an evaluation may allocate",
+            axes.count(),
+            mib(bytes),
+            mib(CONTROL_SAMPLE_BUDGET_BYTES),
+        ),
+    ))
 }
 
 /// The node's ROS interface: topic and service names, and input staleness.
@@ -674,6 +707,41 @@ mod tests {
         assert_eq!(s.horizon, 0.5);
         assert_eq!(s.trajectories, 2000);
         assert_eq!(s.model, ModelKind::PointMass);
+    }
+
+    #[test]
+    fn evaluations_beyond_the_memory_budget_are_refused_naming_values_and_budget() {
+        // Issue 12, failure 6: 100 000 × 10 000 validated, then the first evaluation asked for
+        // 7.5 GiB and the allocator aborted the process.
+        let dir = temp_dir("budget");
+        let path = write(
+            &dir,
+            "big.yaml",
+            "cstep_node:\n  ros__parameters:\n    trajectories: 100000\n    steps: 10000\n",
+        );
+        let err = Settings::load(Some(&path), DEFAULT_NODE_NAME, &[]).unwrap_err();
+        assert_eq!(
+            err.to_string(),
+            format!(
+                "{}: 'trajectories' × 'steps' (100000 × 10000, 2 command axes) needs 7629 MiB \
+                 of control samples, more than the 256 MiB an evaluation may allocate",
+                path.display()
+            )
+        );
+        let overrides = |t: u64, s: u64, dims: u64| {
+            vec![
+                format!("trajectories:={t}"),
+                format!("steps:={s}"),
+                format!("volume_dims:={dims}"),
+            ]
+        };
+        // At the budget (2 axes × 4 bytes × 100 000 × 335 ≤ 256 MiB) it loads; one step more
+        // does not, and 3D commands take a third more.
+        assert!(Settings::load(None, DEFAULT_NODE_NAME, &overrides(100_000, 335, 2)).is_ok());
+        let err = Settings::load(None, DEFAULT_NODE_NAME, &overrides(100_000, 336, 2));
+        assert!(err.unwrap_err().to_string().starts_with("command line: "));
+        assert!(Settings::load(None, DEFAULT_NODE_NAME, &overrides(100_000, 223, 3)).is_ok());
+        assert!(Settings::load(None, DEFAULT_NODE_NAME, &overrides(100_000, 224, 3)).is_err());
     }
 
     #[test]

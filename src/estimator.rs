@@ -261,10 +261,7 @@ impl Estimator {
             Some((cached, controls)) if *cached == seed => controls.clone(),
             _ => {
                 let s = &self.settings;
-                let axes = match s.volume_dims {
-                    VolumeDims::Two => CommandAxes::Planar,
-                    VolumeDims::Three => CommandAxes::Spatial,
-                };
+                let axes = CommandAxes::for_volume_dims(s.volume_dims);
                 let controls = Arc::new(sample(s.sampler, s.trajectories, s.steps, axes, seed));
                 *cache = Some((seed, controls.clone()));
                 controls

@@ -51,6 +51,16 @@ impl SamplerKind {
     }
 }
 
+/// The most memory an evaluation's control sample may take, bytes (256 MiB).
+///
+/// The sample (`trajectories × steps × command axes` `f32`) is the only part of an evaluation
+/// that grows with the product of trajectories and steps: the rollout keeps each block's model
+/// state for one step at a time, and endpoints and volumes grow with the trajectories alone. So
+/// this bounds what an evaluation allocates, and the configuration refuses settings beyond it up
+/// front instead of letting the first evaluation abort the process. The default 150 × 100 takes
+/// 117 KiB; 256 MiB still allows e.g. 100 000 trajectories × 335 steps in 2D.
+pub const CONTROL_SAMPLE_BUDGET_BYTES: u64 = 256 << 20;
+
 /// A batch of sampled control trajectories, laid out step-major so the commands of one step
 /// for all trajectories are contiguous: `[step][axis][lane]`.
 #[derive(Debug, Clone, PartialEq)]
@@ -62,6 +72,15 @@ pub struct Controls {
 }
 
 impl Controls {
+    /// Bytes a sample of `lanes` trajectories of `steps` commands on `axes` takes (saturating),
+    /// to check against [`CONTROL_SAMPLE_BUDGET_BYTES`] before drawing one.
+    pub fn bytes(lanes: usize, steps: usize, axes: CommandAxes) -> u64 {
+        let values = (lanes as u64)
+            .saturating_mul(steps as u64)
+            .saturating_mul(axes.count() as u64);
+        values.saturating_mul(std::mem::size_of::<f32>() as u64)
+    }
+
     /// Number of trajectories.
     pub fn lanes(&self) -> usize {
         self.lanes

@@ -258,6 +258,18 @@ fn malformed_inputs_fail_with_one_line_naming_file_and_field() {
         "command line",
         "'horizon' must be a positive number",
     );
+    // Validates, but its control sample would take 7.5 GiB: refused before any evaluation
+    // (issue 12, failure 6: the allocator aborted the process, exit 134).
+    assert_clear_error(
+        &eval(
+            &good_odom,
+            &good_scan,
+            &["-p", "trajectories:=100000", "-p", "steps:=10000"],
+        ),
+        "command line",
+        "(100000 × 10000, 2 command axes) needs 7629 MiB of control samples, more than the \
+         256 MiB an evaluation may allocate",
+    );
     assert_clear_error(
         &eval(&good_odom, &good_scan, &["--goal", "1,x"]),
         "--goal",

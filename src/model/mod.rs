@@ -14,6 +14,7 @@ pub mod urdf;
 pub use batch::Batch;
 
 use crate::state::RobotState;
+use crate::volume::VolumeDims;
 
 /// The state components every model stores first, in this order: world-frame position relative
 /// to the robot's start, metres. The rollout reads them for collision checks and endpoints.
@@ -35,6 +36,15 @@ impl CommandAxes {
         match self {
             CommandAxes::Planar => 2,
             CommandAxes::Spatial => 3,
+        }
+    }
+
+    /// The axes that measure volumes of `dims`: planar commands for areas at a held altitude,
+    /// spatial ones for 3D volumes.
+    pub fn for_volume_dims(dims: VolumeDims) -> Self {
+        match dims {
+            VolumeDims::Two => CommandAxes::Planar,
+            VolumeDims::Three => CommandAxes::Spatial,
         }
     }
 }

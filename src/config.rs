@@ -67,7 +67,7 @@ impl ParameterSet {
     /// Overlays the parameters file `path`'s section for node `node_name`.
     pub fn merge_file(&mut self, path: &Path, node_name: &str) -> Result<(), ConfigError> {
         let source = path.display().to_string();
-        let text = std::fs::read_to_string(path)
+        let text = crate::input_file::read_to_string(path)
             .map_err(|e| ConfigError::new(&source, format!("cannot read the file: {e}")))?;
         self.merge_yaml(&text, &source, path.parent(), node_name)
     }

@@ -16,11 +16,13 @@
 //! 6. [`estimator`] — Algorithm 1 end to end;
 //! 7. [`reward`] — the empowered reward `r_d · log(c · λ)`.
 //!
-//! [`config`] reads the node's `ros__parameters` YAML; [`ros`] holds the ROS message mirrors.
+//! [`config`] reads the node's `ros__parameters` YAML; [`ros`] holds the ROS message mirrors;
+//! [`input_file`] reads every file a user names, regular files of bounded size only.
 
 pub mod arena;
 pub mod config;
 pub mod estimator;
+pub mod input_file;
 pub mod model;
 pub mod occupancy;
 pub mod plot;

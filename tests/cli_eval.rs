@@ -298,6 +298,61 @@ fn malformed_inputs_fail_with_one_line_naming_file_and_field() {
 }
 
 #[test]
+fn endless_special_and_oversized_input_files_are_refused_naming_them() {
+    // Issue 12, failure 7: /dev/zero as any input was read until memory ran out, a FIFO blocked
+    // forever. Each is refused in one line naming the path and what it is.
+    let dir = workdir("special");
+    let odom = write(
+        &dir,
+        "odom.json",
+        &serde_json::to_string(&odometry()).unwrap(),
+    );
+    let scan = write(
+        &dir,
+        "scan.json",
+        &serde_json::to_string(&corridor_scan()).unwrap(),
+    );
+    let device = "it is a character device, not a regular file";
+    let zero = Path::new("/dev/zero");
+    assert_clear_error(&eval(zero, &scan, &[]), "/dev/zero", device);
+    assert_clear_error(
+        &eval(&odom, Path::new("/dev/urandom"), &[]),
+        "/dev/urandom",
+        device,
+    );
+    let urdf = ["-p", "robot_description:=/dev/zero"];
+    assert_clear_error(&eval(&odom, &scan, &urdf), "/dev/zero", device);
+    let out = Command::new(env!("CARGO_BIN_EXE_cstep"))
+        .args(["eval", "--config", "/dev/zero", "--odom"])
+        .arg(&odom)
+        .arg("--scan")
+        .arg(&scan)
+        .output()
+        .unwrap();
+    assert_clear_error(&out, "/dev/zero", device);
+
+    let fifo = dir.join("scan.fifo");
+    let _ = std::fs::remove_file(&fifo);
+    assert!(Command::new("mkfifo")
+        .arg(&fifo)
+        .status()
+        .unwrap()
+        .success());
+    assert_clear_error(&eval(&odom, &fifo, &[]), "scan.fifo", "it is a FIFO");
+
+    let large = dir.join("large.json");
+    std::fs::File::create(&large)
+        .unwrap()
+        .set_len(cstep::input_file::MAX_INPUT_FILE_BYTES + 1)
+        .unwrap();
+    assert_clear_error(
+        &eval(&large, &scan, &[]),
+        "large.json",
+        "it holds more than 16 MiB, the most an input file may",
+    );
+}
+
+#[test]
 fn degenerate_but_well_formed_inputs_answer_valid_false() {
     let dir = workdir("degenerate");
     let odom = write(

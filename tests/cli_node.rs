@@ -32,3 +32,22 @@ fn a_configuration_beyond_the_memory_budget_is_refused_at_start() {
          of control samples, more than the 256 MiB an evaluation may allocate",
     );
 }
+
+#[test]
+fn a_parameters_file_that_never_ends_is_refused_at_start() {
+    // Issue 12, failure 7: read until memory ran out (/dev/zero) or blocked forever (a FIFO).
+    assert_refused(
+        &node(&["--params-file", "/dev/zero"]),
+        "/dev/zero: cannot read the file: it is a character device, not a regular file",
+    );
+    let fifo = std::env::temp_dir().join(format!("cstep-node-params-{}.fifo", std::process::id()));
+    let _ = std::fs::remove_file(&fifo);
+    assert!(Command::new("mkfifo")
+        .arg(&fifo)
+        .status()
+        .unwrap()
+        .success());
+    let fifo_arg = fifo.display().to_string();
+    assert_refused(&node(&["--params-file", &fifo_arg]), "it is a FIFO");
+    std::fs::remove_file(&fifo).unwrap();
+}

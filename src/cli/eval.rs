@@ -122,7 +122,7 @@ pub fn run(args: EvalArgs) -> Result<(), String> {
 }
 
 fn read_json<T: DeserializeOwned>(path: &Path) -> Result<T, String> {
-    let text = std::fs::read_to_string(path)
+    let text = cstep::input_file::read_to_string(path)
         .map_err(|e| format!("{}: cannot read the file: {e}", path.display()))?;
     serde_json::from_str(&text).map_err(|e| format!("{}: not a valid message: {e}", path.display()))
 }

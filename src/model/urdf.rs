@@ -22,7 +22,8 @@ pub const RPM_TO_RAD_PER_S: f64 = 2.0 * std::f64::consts::PI / 60.0;
 /// file (or source name) and names the missing or bad element, attribute or value.
 #[derive(Debug, thiserror::Error)]
 pub enum UrdfError {
-    /// The file could not be read.
+    /// The file could not be read, or is not a regular file of at most
+    /// [`crate::input_file::MAX_INPUT_FILE_BYTES`].
     #[error("{file}: cannot read the file: {error}")]
     Io {
         /// The file that was asked for.
@@ -127,7 +128,7 @@ impl RobotDescription {
     /// Reads and validates the URDF at `path`; messages name the path as given.
     pub fn load(path: &Path) -> Result<Self, UrdfError> {
         let file = path.display().to_string();
-        let xml = std::fs::read_to_string(path).map_err(|error| UrdfError::Io {
+        let xml = crate::input_file::read_to_string(path).map_err(|error| UrdfError::Io {
             file: file.clone(),
             error,
         })?;

@@ -320,40 +320,46 @@ fn parameter_options(shared: &Arc<Shared>, settings: &crate::config::Settings) -
 /// publish diagnostics; returns when Ctrl-C was pressed.
 async fn serve(shared: &Arc<Shared>, ports: &Ports, node: &Node) {
     let odometry = ports.odom.async_stream().for_each(|received| async move {
-        if let Ok((odom, _)) = received {
-            shared.latest().odom = Some((odom, Instant::now()));
+        match received {
+            Ok((odom, _)) => shared.latest().odom = Some((odom, Instant::now())),
+            Err(e) => shared.undecodable("odometry", &e),
         }
     });
     let goals = ports.goal.async_stream().for_each(|received| async move {
-        if let Ok((goal, _)) = received {
-            let p = goal.pose.position;
-            match goal_position(&p) {
-                Ok(_) => shared.latest().goal = Some(p),
-                Err(e) => shared.note_problem(|l| l.rejected += 1, &format!("goal_pose: {e}")),
+        match received {
+            Ok((goal, _)) => {
+                let p = goal.pose.position;
+                match goal_position(&p) {
+                    Ok(_) => shared.latest().goal = Some(p),
+                    Err(e) => shared.note_problem(|l| l.rejected += 1, &format!("goal_pose: {e}")),
+                }
             }
+            Err(e) => shared.undecodable("goal_pose", &e),
         }
     });
     let scans = ports.scan.async_stream().for_each(|received| async move {
-        if let Ok((scan, _)) = received {
-            // Matched readers of our writers, as the spinner records DDS matching.
-            let scores_wanted = ports.empowerment.get_subscription_count(node) > 0
-                || ports.reward.get_subscription_count(node) > 0;
-            {
-                let mut latest = shared.latest();
-                latest.last_scan = Some(Instant::now());
-                latest.last_scan_unwatched = !scores_wanted;
-                if !scores_wanted {
-                    latest.unwatched += 1;
-                    return;
-                }
+        let scan = match received {
+            Ok((scan, _)) => scan,
+            Err(e) => return shared.undecodable("scan", &e),
+        };
+        // Matched readers of our writers, as the spinner records DDS matching.
+        let scores_wanted = ports.empowerment.get_subscription_count(node) > 0
+            || ports.reward.get_subscription_count(node) > 0;
+        {
+            let mut latest = shared.latest();
+            latest.last_scan = Some(Instant::now());
+            latest.last_scan_unwatched = !scores_wanted;
+            if !scores_wanted {
+                latest.unwatched += 1;
+                return;
             }
-            let with_markers = ports.markers.get_subscription_count(node) > 0;
-            let mut mailbox = shared.mailbox.lock().unwrap_or_else(|e| e.into_inner());
-            if mailbox.replace(PostedScan { scan, with_markers }).is_some() {
-                shared.latest().skipped += 1;
-            }
-            shared.arrived.notify_one();
         }
+        let with_markers = ports.markers.get_subscription_count(node) > 0;
+        let mut mailbox = shared.mailbox.lock().unwrap_or_else(|e| e.into_inner());
+        if mailbox.replace(PostedScan { scan, with_markers }).is_some() {
+            shared.latest().skipped += 1;
+        }
+        shared.arrived.notify_one();
     });
     let service = answer_requests(shared, &ports.evaluate, "evaluate", |request| {
         shared.evaluate_request(request)
@@ -583,6 +589,16 @@ impl Shared {
             .safety_coefficient
             .lock()
             .unwrap_or_else(|e| e.into_inner())
+    }
+
+    /// Counts a message the subscription to `input` could not decode (malformed CDR: a length
+    /// past the end of the buffer, a truncated buffer) as rejected, and has the next diagnostics
+    /// say so: it is dropped like any malformed input, not silently.
+    fn undecodable(&self, input: &str, error: &ros2_client::ReadError) {
+        self.note_problem(
+            |l| l.rejected += 1,
+            &format!("{input}: undecodable message dropped: {error}"),
+        );
     }
 
     fn note_problem(&self, count: impl FnOnce(&mut Latest), problem: &str) {

@@ -1,6 +1,8 @@
 """`cstep node` against real rclpy over real DDS (localhost, a private domain per test)."""
 
 import math
+import random
+import struct
 
 import pytest
 from conftest import wait_until
@@ -11,6 +13,7 @@ from geometry_msgs.msg import Point, PoseStamped
 from node_rig import RELIABLE, corridor_scan, cstep_eval, message_to_ordereddict, odometry
 from rcl_interfaces.msg import Parameter, ParameterType, ParameterValue
 from rcl_interfaces.srv import SetParameters
+from rclpy.serialization import serialize_message
 
 
 def test_every_scan_gets_both_outputs_with_its_stamp_and_cstep_eval_agrees(rig, tmp_path):
@@ -421,3 +424,48 @@ def test_bad_inputs_are_skipped_and_counted_and_the_node_keeps_scoring(rig, cste
         assert math.isfinite(m.empowerment)
     values = rig.values()
     assert int(values["inputs_rejected"]) >= 5
+
+
+def test_undecodable_scans_and_odometry_are_counted_and_the_node_keeps_scoring(rig, cstep_node):
+    """Malformed CDR on the input topics (issue 12, failure 8): each message is dropped,
+    counted in ``inputs_rejected`` and named in diagnostics (before, they vanished uncounted);
+    the node scores the next valid scan."""
+    valid = serialize_message(corridor_scan(9000))
+    # CDR layout: 4-byte encapsulation header, stamp (8), frame_id's length at 12; after
+    # "base_link\0" and padding, seven float32 fields, then the length of ranges at 56.
+    frame_id_length, ranges_length = 12, 56
+    assert struct.unpack_from("<I", valid, frame_id_length)[0] == len("base_link") + 1
+    assert struct.unpack_from("<I", valid, ranges_length)[0] == 180
+
+    def claiming_4_gb(offset: int) -> bytes:
+        return valid[:offset] + struct.pack("<I", 0xFFFF_FFFF) + valid[offset + 4 :]
+
+    bad_scans = [
+        valid[: len(valid) // 2],  # truncated
+        claiming_4_gb(frame_id_length),
+        claiming_4_gb(ranges_length),
+        valid[:4] + random.Random(8).randbytes(300),  # random bytes after a CDR header
+    ]
+    before = int(rig.next_diagnostics()["inputs_rejected"])
+
+    def said(prefix: str, since: int):
+        return lambda: any(d.status[0].message.startswith(prefix) for d in rig.diagnostics[since:])
+
+    # A problem shows in diagnostics while inputs are fresh: keep feeding valid ones meanwhile.
+    seen = len(rig.diagnostics)
+    for raw in bad_scans:
+        rig.scan.publish(raw)
+    sec = rig.feed_until(
+        said("scan: undecodable message dropped: ", seen), "diagnostics name it", first_sec=9100
+    )
+    seen = len(rig.diagnostics)
+    rig.odom.publish(serialize_message(odometry())[:40])
+    sec = rig.feed_until(
+        said("odometry: undecodable message dropped: ", seen), "diagnostics name it", sec
+    )
+
+    rig.reward.clear()
+    rig.feed_until(lambda: any(m.header.stamp.sec >= sec for m in rig.reward), "a score", sec)
+    assert cstep_node.poll() is None, "the node died"
+    assert all(m.valid and math.isfinite(m.reward) for m in rig.reward)
+    assert int(rig.next_diagnostics()["inputs_rejected"]) == before + len(bad_scans) + 1

@@ -240,10 +240,18 @@ fn resolve_path(value: Value, base_dir: Option<&Path>) -> Value {
     }
 }
 
+/// A value as it reads in a one-line error: scalars as YAML (`soon`, `true`), lists and maps in
+/// flow style (`[1,2]`), never the block YAML that would span lines.
 fn show(value: &Value) -> String {
-    serde_norway::to_string(value)
-        .map(|s| s.trim().to_owned())
-        .unwrap_or_else(|_| format!("{value:?}"))
+    let text = match value {
+        Value::Sequence(_) | Value::Mapping(_) | Value::Tagged(_) => {
+            serde_json::to_string(value).ok()
+        }
+        _ => serde_norway::to_string(value).ok(),
+    };
+    text.map(|s| s.trim().to_owned())
+        .filter(|s| !s.contains('\n'))
+        .unwrap_or_else(|| format!("{value:?}"))
 }
 
 /// Which dynamics model rolls out the trajectories.
@@ -364,7 +372,7 @@ impl Settings {
         };
         let models = ["quadrotor", "point_mass"];
         let model = required("model", named(set, "model", ModelKind::from_name, &models)?)?;
-        let horizon = required("horizon", positive(set, "horizon")?)?;
+        let horizon = required_positive(set, "horizon")?;
         let count_source = |name: &str| set.values.get(name).map(|(_, s)| s.clone());
         let sample_source = [count_source("trajectories"), count_source("steps")];
         let trajectories = required(
@@ -378,8 +386,7 @@ impl Settings {
             named(set, "sampler", SamplerKind::from_name, &samplers)?,
         )?;
         let seed = required("seed", set.take_u64("seed")?)?;
-        let safety_coefficient =
-            required("safety_coefficient", positive(set, "safety_coefficient")?)?;
+        let safety_coefficient = required_positive(set, "safety_coefficient")?;
         let volume_dims = required(
             "volume_dims",
             named(
@@ -542,9 +549,8 @@ impl NodeSettings {
         let markers_topic = name("markers_topic")?;
         let evaluate_service = name("evaluate_service")?;
         let evaluate_batch_service = name("evaluate_batch_service")?;
-        let input_timeout = required("input_timeout", positive(set, "input_timeout")?)?;
-        let time_jump_tolerance =
-            required("time_jump_tolerance", positive(set, "time_jump_tolerance")?)?;
+        let input_timeout = required_positive(set, "input_timeout")?;
+        let time_jump_tolerance = required_positive(set, "time_jump_tolerance")?;
         let use_sim_time = match set.take("use_sim_time") {
             None | Some((Value::Null, _)) => false,
             Some((Value::Bool(b), _)) => b,
@@ -625,6 +631,20 @@ fn positive(set: &mut ParameterSet, name: &str) -> Result<Option<f64>, ConfigErr
         )),
         other => Ok(other),
     }
+}
+
+/// A positive number every evaluation needs. NaN, which leaves an optional number unset (the ROS
+/// idiom), is refused here as not finite rather than reported as cleared.
+fn required_positive(set: &mut ParameterSet, name: &str) -> Result<f64, ConfigError> {
+    if let Some((Value::Number(n), source)) = set.values.get(name) {
+        if n.as_f64().is_some_and(f64::is_nan) {
+            return Err(ConfigError::new(
+                source,
+                format!("'{name}' must be a positive number, got NaN (not finite)"),
+            ));
+        }
+    }
+    required(name, positive(set, name)?)
 }
 
 fn finite(set: &mut ParameterSet, name: &str) -> Result<Option<f64>, ConfigError> {
@@ -763,6 +783,13 @@ mod tests {
                 "'volume_dims' must be one of 2 | 3, got \"4\"",
             ),
             ("horizn: 1.0", "unknown parameter 'horizn'"),
+            // Issue 12, failure 9: NaN said "must be set (... a file or -p cleared it)", and a
+            // list gave a three-line error.
+            (
+                "horizon: .nan",
+                "'horizon' must be a positive number, got NaN (not finite)",
+            ),
+            ("horizon: [1, 2]", "'horizon' must be a number, got [1,2]"),
             (
                 "safety_coefficient: 0",
                 "'safety_coefficient' must be a positive number, got 0",
@@ -777,8 +804,18 @@ mod tests {
             let err = Settings::load(Some(&path), DEFAULT_NODE_NAME, &[]).unwrap_err();
             let text = err.to_string();
             assert!(text.starts_with(&path.display().to_string()), "{text}");
+            assert_eq!(text.lines().count(), 1, "{text}");
             assert!(text.contains(expected), "{text} lacks {expected}");
         }
+        let err = Settings::load(
+            None,
+            DEFAULT_NODE_NAME,
+            &["safety_coefficient:=.nan".into()],
+        );
+        assert_eq!(
+            err.unwrap_err().to_string(),
+            "command line: 'safety_coefficient' must be a positive number, got NaN (not finite)"
+        );
         let err = Settings::load(None, DEFAULT_NODE_NAME, &["seed=3".into()]).unwrap_err();
         assert!(err.to_string().contains("name:=value"));
         let path = write(

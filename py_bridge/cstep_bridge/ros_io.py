@@ -145,7 +145,9 @@ def _point(goal: np.ndarray | None) -> Point:
 
 class CStepNode:
     """A private `cstep node` process on ``domain_id``, localhost only; stopped by PID on close,
-    and by the kernel when this process ends without closing it."""
+    and by the kernel when this process ends without closing it. Its output goes to
+    ``cstep-node-<domain>-*.log`` in the temporary directory, removed on close when the node
+    stopped cleanly and kept, for its error, when it did not."""
 
     def __init__(
         self,
@@ -196,6 +198,8 @@ class CStepNode:
                 self.proc.kill()
                 self.proc.wait(timeout=5)
         self.log.close()
+        if self.proc.returncode == 0:
+            Path(self.log.name).unlink(missing_ok=True)
 
 
 @dataclass

@@ -14,7 +14,7 @@ import pybullet as p
 import pytest
 from conftest import REPO
 from cstep_bridge.env import CStepDroneEnv
-from cstep_bridge.ros_io import RewardTimeout, RosBridge, odometry_msg, scan_msg
+from cstep_bridge.ros_io import CStepNode, RewardTimeout, RosBridge, odometry_msg, scan_msg
 from cstep_bridge.sim import LIDAR_BEAMS, Arena, DroneSim
 from gymnasium.utils.env_checker import check_env
 from node_rig import cstep_eval
@@ -287,3 +287,26 @@ def test_a_killed_trainer_leaves_no_node_behind(ros_domain):
     while not process_gone(node):
         assert time.monotonic() < deadline, f"the trainer's cstep node {node} outlived it"
         time.sleep(0.05)
+
+
+def test_a_node_closed_cleanly_leaves_no_log_and_a_failed_one_keeps_its_error(ros_domain):
+    """Issue 12, failure 9: every bridge node left its ``cstep-node-<domain>-*.log`` behind."""
+    node = CStepNode(ros_domain)
+    log = Path(node.log.name)
+    deadline = time.monotonic() + 20
+    # Stopped once serving (its start-up line written), so the stop is the clean Ctrl-C path.
+    while "cstep node /cstep_node on ROS_DOMAIN_ID" not in log.read_text():
+        assert node.alive(), log.read_text()
+        assert time.monotonic() < deadline, "the node did not start"
+        time.sleep(0.05)
+    node.close()
+    assert node.proc.returncode == 0
+    assert not log.exists()
+
+    failed = CStepNode(ros_domain, extra_params={"horizon": "-1"})
+    failed.proc.wait(timeout=20)
+    failed.close()
+    log = Path(failed.log.name)
+    assert failed.proc.returncode == 1
+    assert "'horizon' must be a positive number" in log.read_text()
+    log.unlink()

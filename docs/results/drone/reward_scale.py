@@ -2,12 +2,14 @@
 empowerment term log(c·λ) = ln c + E along flights, for c = 10, 1 and 0.5.
 
     PYTHONPATH=py_bridge .venv/bin/python docs/results/drone/reward_scale.py \\
-        --model docs/results/drone/models/unempowered-pilot --arenas 20 --out docs/results/drone
+        --arenas 20 --out docs/results/drone [--model RUN_OR_ZIP]
 
 E, the node's empowerment (ln of the free area in m², default node settings as the empowered
-agents train with), does not depend on c, so one pass gives every c. Three behaviours on the first
-``--arenas`` configurations of the evaluation set: the given model's deterministic flights, hovering
-(zero action) and random actions (uniform, seed 0). Writes ``reward_scale.md`` (the table) and
+agents train with), does not depend on c, so one pass gives every c. Behaviours on the first ``--arenas``
+configurations of the evaluation set: flying straight at the goal (a proportional controller on the
+observed goal offset, so the table needs no trained model; about half of these flights end on the
+block), hovering (zero action), random actions (uniform, seed 0) and, with ``--model``, that
+model's deterministic flights. Writes ``reward_scale.md`` (the table) and
 prints it. A positive mean reward means λ > 1/c (not λ > c): c = 0.5 needs λ > 2 m².
 """
 
@@ -53,29 +55,37 @@ def rows(name: str, e: np.ndarray) -> list[str]:
 
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--model", type=Path, required=True, help="run directory with model.zip")
+    ap.add_argument("--model", type=Path, help="also fly this run directory's model.zip")
     ap.add_argument("--arenas", type=int, default=20)
     ap.add_argument("--out", type=Path, required=True)
     args = ap.parse_args()
-    model_path = args.model / "model.zip" if args.model.is_dir() else args.model
-    model = PPO.load(model_path, device="cpu")
-    norm = observation_normalizer(model_path)
+    bridge = RosBridge(safety_coefficient=1.0)
+    env = CStepDroneEnv(empowered=True, safety_coefficient=1.0, bridge=bridge)
     rng = np.random.default_rng(0)
     behaviours = {
-        "trained flights": lambda obs: model.predict(norm(obs) if norm else obs, True)[0],
+        # the observation starts with goal − position (m); a full action moves the waypoint
+        # max_offset (m)
+        "straight to the goal": lambda obs: np.clip(obs[:2] / env.max_offset, -1.0, 1.0),
         "hovering": lambda obs: np.zeros(2),
         "random actions": lambda obs: rng.uniform(-1, 1, 2),
     }
+    if args.model is not None:
+        model_path = args.model / "model.zip" if args.model.is_dir() else args.model
+        model = PPO.load(model_path, device="cpu")
+        norm = observation_normalizer(model_path)
+        behaviours["trained flights"] = lambda obs: model.predict(norm(obs) if norm else obs, True)[
+            0
+        ]
     arenas = load()[: args.arenas]
-    bridge = RosBridge(safety_coefficient=1.0)
-    env = CStepDroneEnv(empowered=True, safety_coefficient=1.0, bridge=bridge)
     head = " | ".join(f"q{round(q * 100):02d}" for q in QUANTILES)
     lines = [
         "# The empowerment term log(c·λ) along flights in the arena",
         "",
         (
             f"Command: `PYTHONPATH=py_bridge .venv/bin/python docs/results/drone/reward_scale.py "
-            f"--model {args.model} --arenas {args.arenas} --out {args.out}`"
+            f"--arenas {args.arenas} --out {args.out}"
+            + ("" if args.model is None else f" --model {args.model}")
+            + "`"
         ),
         "",
         f"| Behaviour | c | steps | {head} | negative |",

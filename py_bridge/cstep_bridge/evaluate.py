@@ -3,18 +3,25 @@
     python -m cstep_bridge.evaluate --model runs/drone-unempowered --model runs/drone-empowered-c1 \\
         --out docs/results/drone
 
-Every agent flies every configuration of the environment's fixed evaluation set (the drone: the
-100 arenas of ``data/drone_eval_set.json``; the maze: its 18 start × goal combinations) with its
-deterministic policy. Evaluation needs no reward, so no ``cstep node`` runs. Writes to ``--out``:
+Models with the same label (``--label``, or by default the agent and its c from run.json, e.g.
+``unempowered``, ``empowered c=0.5``) are one agent trained with several seeds. Every model flies
+every configuration of the environment's fixed evaluation set (the drone: the 100 arenas of
+``data/drone_eval_set.json``; the maze: its 18 start × goal combinations) with its deterministic
+policy. Evaluation needs no reward, so no ``cstep node`` runs. Writes to ``--out``:
 
 - ``results.md``: the paper's tables — success rate and average clear time; mean time per episode
   within 0.1 … 0.5 m of an obstacle; its decrease relative to the first agent (the baseline); for
-  the maze also which route each agent took.
-- ``results.json``: every summary, and every episode's outcome.
-- ``paths.png``: the flown paths over the map (the drone: the first six configurations).
-- ``time_near_obstacle.png``: mean time within a distance of an obstacle against the distance.
+  the maze also which route each agent took. Each mean over seeds and configurations comes with
+  its 95 % bootstrap interval, and each agent's p-values against the baseline (paired tests on the
+  same configurations) are tabled.
+- ``results.json``: every summary, interval and test, and every episode's outcome.
+- ``paths.png``: the flown paths over the map (the drone: the first six configurations; of each
+  agent's first seed).
+- ``time_near_obstacle.png``: mean time within a distance of an obstacle against the distance,
+  with its 95 % interval as a band.
 
-The metrics are defined in :mod:`cstep_bridge.metrics`.
+The metrics are defined in :mod:`cstep_bridge.metrics`, the intervals and tests in
+:mod:`cstep_bridge.comparison`.
 """
 
 from __future__ import annotations
@@ -31,7 +38,7 @@ from typing import Any
 
 import numpy as np
 
-from . import metrics
+from . import comparison, metrics
 from .envs import ENV_NAMES, make_env
 from .plots import MapPanel, Path2D, paths_figure, threshold_figure
 
@@ -41,7 +48,8 @@ DRONE_PANELS = 6
 
 @dataclass
 class Agent:
-    """A trained model to evaluate, and how it is called in the tables."""
+    """A trained model to evaluate (one seed of an agent), and how its agent is called in the
+    tables."""
 
     label: str
     model: Path
@@ -70,13 +78,20 @@ def find_agent(path: Path, label: str | None) -> Agent:
     return Agent(label, model, settings.get("env", ""), steps, settings.get("seed"))
 
 
-def distinct_labels(agents: list[Agent]) -> None:
-    """Names agents that would share a label after their training seed, e.g. "c=1 (seed 2)"."""
-    for agent in agents:
-        twins = [a for a in agents if a.label == agent.label]
-        if len(twins) > 1 and len({a.seed for a in twins}) == len(twins):
-            for a in twins:
-                a.label = f"{a.label} (seed {a.seed})"
+def group_seeds(models: list[Agent]) -> dict[str, list[Agent]]:
+    """The models by label, in the order the labels first appear (the first is the baseline): each
+    label's models are one agent's seeds. Refuses two models of one label trained with the same
+    seed (e.g. a run's final model and its checkpoint), which are not two seeds of an agent."""
+    groups: dict[str, list[Agent]] = {}
+    for model in models:
+        groups.setdefault(model.label, []).append(model)
+    for label, seeds in groups.items():
+        known = [m.seed for m in seeds if m.seed is not None]
+        if len(set(known)) != len(known):
+            raise SystemExit(
+                f"{label}: two models trained with the same seed: pass --label for each --model"
+            )
+    return groups
 
 
 def configurations(env: str, eval_set: Path | None = None) -> list[Any]:
@@ -184,15 +199,31 @@ def _fmt(v: float | None, spec: str, suffix: str = "") -> str:
     return "–" if v is None else f"{v:{spec}}{suffix}"
 
 
+def _ci(iv: comparison.Interval, spec: str = ".2f") -> str:
+    """A mean and its interval, e.g. ``3.21 [3.05, 3.40]``; a rate (``spec`` "%") as ``82% [75, 88]``."""
+    if iv.mean is None:
+        return "–"
+    if spec == "%":
+        return f"{iv.mean:.0%} [{100 * iv.low:.0f}, {100 * iv.high:.0f}]"
+    return f"{iv.mean:{spec}} [{iv.low:{spec}}, {iv.high:{spec}}]"
+
+
+def _p(test: comparison.PairedTest) -> str:
+    return f"{test.pvalue:.2g}" if test.pvalue >= 0.001 else "<0.001"
+
+
 def markdown(
     env: str,
-    agents: list[Agent],
-    results: dict[str, list[metrics.Episode]],
+    groups: dict[str, list[Agent]],
+    runs: dict[str, list[list[metrics.Episode]]],
+    intervals: dict[str, dict[str, comparison.Interval]],
+    tests: dict[str, dict[str, comparison.PairedTest]],
     summaries: dict[str, metrics.Summary],
     command: str,
 ) -> str:
-    """results.md: the paper's tables for these agents (``summaries`` of ``results``, by label)."""
-    n = len(next(iter(results.values())))
+    """results.md: the paper's tables for these agents (by label: their models, each seed's
+    ``runs``, the ``intervals`` and ``summaries`` of those, and the ``tests`` against the first)."""
+    n = len(next(iter(runs.values()))[0])
     th = metrics.THRESHOLDS
     head = "| Distance threshold (m) | " + " | ".join(f"{d:g}" for d in th) + " |"
     rule = "|---|" + "---|" * len(th)
@@ -201,9 +232,19 @@ def markdown(
         "",
         f"Command: `{command}`",
         "",
-        "| Agent | Model | Training steps |",
-        "|---|---|---:|",
-        *(f"| {a.label} | `{a.model}` | {a.steps} |" for a in agents),
+        "| Agent | Model | Training seed | Training steps |",
+        "|---|---|---:|---:|",
+        *(
+            f"| {a.label} | `{a.model}` | {_fmt(a.seed, 'd')} | {a.steps} |"
+            for models in groups.values()
+            for a in models
+        ),
+        "",
+        (
+            "Each mean is over every seed's model and every configuration, with its 95 % "
+            "bootstrap interval [low, high]: seeds and configurations resampled together "
+            f"({comparison.RESAMPLES} resamples; see cstep_bridge/comparison.py)."
+        ),
         "",
     ]
     if clear_x(env) is None:  # no obstacle to clear: success and collisions only
@@ -214,8 +255,8 @@ def markdown(
             "|---|---:|---:|",
         ]
         lines += [
-            f"| {label} | {s.success_rate:.0%} | {s.collision_rate:.0%} |"
-            for label, s in summaries.items()
+            f"| {label} | {_ci(ci['success'], '%')} | {_ci(ci['collision'], '%')} |"
+            for label, ci in intervals.items()
         ]
     else:
         lines += [
@@ -232,9 +273,9 @@ def markdown(
             "|---|---:|---:|---:|---:|",
         ]
         lines += [
-            f"| {label} | {s.success_rate:.0%} | {_fmt(s.clear_time, '.2f')} | "
-            f"{s.collision_rate:.0%} | {s.cleared_rate:.0%} |"
-            for label, s in summaries.items()
+            f"| {label} | {_ci(ci['success'], '%')} | {_ci(ci['clear_time'])} | "
+            f"{_ci(ci['collision'], '%')} | {_ci(ci['cleared'], '%')} |"
+            for label, ci in intervals.items()
         ]
     if env == "maze":
         lines += [
@@ -244,8 +285,8 @@ def markdown(
             "| Agent | Narrow | Wide | Neither |",
             "|---|---:|---:|---:|",
         ]
-        for label, eps in results.items():
-            routes = [e.extra["route"] for e in eps]
+        for label, seeds in runs.items():
+            routes = [e.extra["route"] for run in seeds for e in run]
             shares = [routes.count(r) / len(routes) for r in ("narrow", "wide", "neither")]
             lines.append(f"| {label} | " + " | ".join(f"{s:.0%}" for s in shares) + " |")
     lines += [
@@ -257,8 +298,8 @@ def markdown(
         head,
         rule,
         *(
-            f"| {label} | " + " | ".join(f"{s.time_within[d]:.2f}" for d in th) + " |"
-            for label, s in summaries.items()
+            f"| {label} | " + " | ".join(_ci(ci[f"within_{d:g}"]) for d in th) + " |"
+            for label, ci in intervals.items()
         ),
     ]
     base_label, base = next(iter(summaries.items()))
@@ -273,6 +314,27 @@ def markdown(
         for label, s in list(summaries.items())[1:]:
             cut = metrics.decrease(s, base)
             lines.append(f"| {label} | " + " | ".join(_fmt(cut[d], ".1f", "%") for d in th) + " |")
+        named = {"success": "Success"} | ({"clear_time": "Clear time"} if clear_x(env) else {})
+        named |= {f"within_{d:g}": f"Within {d:g} m" for d in th}
+        lines += [
+            "",
+            f"## Paired tests against {base_label} (two-sided p-values)",
+            "",
+            (
+                "On the same configurations. Success: exact McNemar test, pairing each "
+                "configuration flown by the same-numbered seed when both agents have as many "
+                "seeds, else each configuration's majority outcome over the seeds. Clear time and "
+                "time within a distance: Wilcoxon signed-rank test of the per-configuration means "
+                "over seeds (clear time: on the configurations both cleared)."
+            ),
+            "",
+            "| Agent | " + " | ".join(named.values()) + " |",
+            "|---|" + "---:|" * len(named),
+        ]
+        lines += [
+            f"| {label} | " + " | ".join(_p(t[k]) for k in named) + " |"
+            for label, t in tests.items()
+        ]
     return "\n".join(lines) + "\n"
 
 
@@ -325,7 +387,8 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         type=Path,
         action="append",
         required=True,
-        help="a run directory or model .zip; repeat for each agent (first = baseline)",
+        help="a run directory or model .zip; repeat for each agent (first = baseline) and for "
+        "each seed of an agent (models with the same label are one agent's seeds)",
     )
     ap.add_argument("--label", action="append", help="a name per --model, in the same order")
     ap.add_argument("--env", choices=ENV_NAMES, help="default: from the models' run.json")
@@ -350,39 +413,49 @@ def main(argv: list[str] | None = None) -> int:
     """Entry point of ``python -m cstep_bridge.evaluate``."""
     args = parse_args(argv)
     labels = args.label or [None] * len(args.model)
-    agents = [find_agent(m, lb) for m, lb in zip(args.model, labels, strict=True)]
-    envs = {args.env} if args.env else {a.env for a in agents}
+    models = [find_agent(m, lb) for m, lb in zip(args.model, labels, strict=True)]
+    envs = {args.env} if args.env else {a.env for a in models}
     if len(envs) != 1 or "" in envs:
         raise SystemExit(f"cannot tell which env to evaluate on ({envs}): pass --env")
     env = envs.pop()
-    if not args.label:
-        distinct_labels(agents)
-    if len({a.label for a in agents}) != len(agents):
-        raise SystemExit("two agents share a label: pass --label for each --model")
+    groups = group_seeds(models)
     try:
         n = len(configurations(env, args.eval_set))
     except ValueError as err:
         raise SystemExit(str(err)) from err
     indices = list(range(min(n, args.episodes or n)))
-    results, summaries = {}, {}
-    for agent in agents:
-        print(f"{agent.label}: {len(indices)} episodes on {env} ({agent.model})", flush=True)
-        results[agent.label] = evaluate_agent(agent, env, indices, args.jobs, args.eval_set)
-        s = summaries[agent.label] = metrics.summarize(results[agent.label], clear_x(env))
-        print(
-            f"  success {s.success_rate:.0%}, collisions {s.collision_rate:.0%}, "
-            f"cleared {_fmt(s.cleared_rate, '.0%')}, clear time {_fmt(s.clear_time, '.2f', ' s')}",
-            flush=True,
-        )
+    line = clear_x(env)
+    runs: dict[str, list[list[metrics.Episode]]] = {}
+    summaries, intervals, tests = {}, {}, {}
+    for label, seeds in groups.items():
+        runs[label] = []
+        for model in seeds:
+            print(f"{label}: {len(indices)} episodes on {env} ({model.model})", flush=True)
+            runs[label].append(evaluate_agent(model, env, indices, args.jobs, args.eval_set))
+            s = metrics.summarize(runs[label][-1], line)
+            print(
+                f"  success {s.success_rate:.0%}, collisions {s.collision_rate:.0%}, "
+                f"cleared {_fmt(s.cleared_rate, '.0%')}, "
+                f"clear time {_fmt(s.clear_time, '.2f', ' s')}",
+                flush=True,
+            )
+        summaries[label] = metrics.summarize([e for run in runs[label] for e in run], line)
+        intervals[label] = comparison.intervals(runs[label], line)
+    base_label, base_runs = next(iter(runs.items()))
+    for label, seeds in list(runs.items())[1:]:
+        tests[label] = comparison.versus_baseline(base_runs, seeds, line)
     out: Path = args.out
     out.mkdir(parents=True, exist_ok=True)
     command = "python -m cstep_bridge.evaluate " + shlex.join(
         argv if argv is not None else sys.argv[1:]
     )
-    (out / "results.md").write_text(markdown(env, agents, results, summaries, command))
+    (out / "results.md").write_text(
+        markdown(env, groups, runs, intervals, tests, summaries, command)
+    )
     episodes = {
         label: [
             {
+                "model": str(model.model),
                 "config": e.config,
                 "success": e.success,
                 "collision": e.collision,
@@ -391,30 +464,47 @@ def main(argv: list[str] | None = None) -> int:
                 "end": [round(float(v), 3) for v in e.xy[-1]],
                 **e.extra,
             }
-            for e in eps
+            for model, run in zip(groups[label], seeds, strict=True)
+            for e in run
         ]
-        for label, eps in results.items()
+        for label, seeds in runs.items()
     }
     (out / "results.json").write_text(
         json.dumps(
             {
                 "env": env,
                 "command": command,
+                "baseline": base_label,
                 "summaries": {k: asdict(v) for k, v in summaries.items()},
+                "intervals": {
+                    k: {name: asdict(iv) for name, iv in v.items()} for k, v in intervals.items()
+                },
+                "tests": {k: {name: asdict(t) for name, t in v.items()} for k, v in tests.items()},
                 "episodes": episodes,
             },
             indent=1,
         )
     )
+    first = {label: seeds[0] for label, seeds in runs.items()}
     paths_figure(
-        panels(env, agents, results, args.eval_set), [a.label for a in agents], out / "paths.png"
+        panels(env, [seeds[0] for seeds in groups.values()], first, args.eval_set),
+        list(groups),
+        out / "paths.png",
     )
     fine = {
-        label: [sum(e.time_within(d) for e in eps) / len(eps) for d in FINE_THRESHOLDS]
-        for label, eps in results.items()
+        label: [
+            comparison.bootstrap_ci(
+                comparison.metric_matrix(seeds, lambda e, d=d: e.time_within(d))
+            )
+            for d in FINE_THRESHOLDS
+        ]
+        for label, seeds in runs.items()
     }
     threshold_figure(
-        FINE_THRESHOLDS, fine, out / "time_near_obstacle.png", title=f"{env}: time near obstacles"
+        FINE_THRESHOLDS,
+        fine,
+        out / "time_near_obstacle.png",
+        title=f"{env}: time near obstacles (bands: 95 % intervals)",
     )
     print(f"wrote {out / 'results.md'}, results.json, paths.png, time_near_obstacle.png")
     return 0

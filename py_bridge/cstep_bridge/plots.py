@@ -15,6 +15,8 @@ import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.patches import Rectangle
 
+from .comparison import Interval
+
 Rect = tuple[float, float, float, float]  # x0, y0, x1, y1
 
 
@@ -128,13 +130,21 @@ def paths_figure(panels: Sequence[MapPanel], labels: Sequence[str], png: Path, c
 
 
 def threshold_figure(
-    thresholds: Sequence[float], seconds: Mapping[str, Sequence[float]], png: Path, title: str = ""
+    thresholds: Sequence[float],
+    seconds: Mapping[str, Sequence[Interval]],
+    png: Path,
+    title: str = "",
 ) -> None:
     """Mean time per episode within a distance of an obstacle, per agent, against the distance
-    (the paper's Figure "average time spent under different distance thresholds")."""
+    (the paper's Figure "average time spent under different distance thresholds"), with each
+    mean's confidence interval as a band."""
     fig, ax = plt.subplots(figsize=(6, 4))
     for i, (label, values) in enumerate(seconds.items()):
-        ax.plot(thresholds, values, marker="o", ms=3, color=f"C{i}", label=label)
+        mean, low, high = (
+            np.array([getattr(v, k) for v in values]) for k in ("mean", "low", "high")
+        )
+        ax.plot(thresholds, mean, marker="o", ms=3, color=f"C{i}", label=label)
+        ax.fill_between(thresholds, low, high, color=f"C{i}", alpha=0.2, lw=0)
     ax.set_xlabel("distance to the nearest obstacle below (m)")
     ax.set_ylabel("mean time per episode (s)")
     ax.set_title(title)

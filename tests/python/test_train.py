@@ -3,13 +3,14 @@ the empowered agent a real `cstep node` over real DDS (on a private domain, shar
 
 import json
 import os
+import shutil
 import subprocess
 import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
-from cstep_bridge.evaluate import Agent, distinct_labels
+from cstep_bridge.evaluate import Agent, group_seeds
 from stable_baselines3 import PPO
 
 REPO = Path(__file__).resolve().parents[2]
@@ -119,18 +120,18 @@ def test_empowered_training_with_two_envs_sharing_one_node(tmp_path):
     assert [p.name for p in (out / "monitor").iterdir()] == ["batched.monitor.csv"]
 
 
-def test_agents_with_the_same_settings_are_told_apart_by_their_seed():
-    agents = [
+def test_models_with_the_same_label_are_the_seeds_of_one_agent():
+    models = [
         Agent("empowered c=1", Path("a.zip"), "drone", 10, seed=1),
-        Agent("empowered c=1", Path("b.zip"), "drone", 10, seed=2),
         Agent("unempowered", Path("c.zip"), "drone", 10, seed=1),
+        Agent("empowered c=1", Path("b.zip"), "drone", 10, seed=2),
     ]
-    distinct_labels(agents)
-    assert [a.label for a in agents] == [
-        "empowered c=1 (seed 1)",
-        "empowered c=1 (seed 2)",
-        "unempowered",
-    ]
+    groups = group_seeds(models)
+    assert list(groups) == ["empowered c=1", "unempowered"]  # the first label is the baseline
+    assert [m.model.name for m in groups["empowered c=1"]] == ["a.zip", "b.zip"]
+    models.append(Agent("unempowered", Path("d.zip"), "drone", 20, seed=1))  # same run, later
+    with pytest.raises(SystemExit, match="unempowered: two models trained with the same seed"):
+        group_seeds(models)
 
 
 def test_evaluation_cli_writes_the_tables_and_plots(drone_run, tmp_path):
@@ -164,6 +165,36 @@ def test_evaluation_cli_writes_the_tables_and_plots(drone_run, tmp_path):
         assert doc["summaries"][label]["episodes"] == 2
     for png in ("paths.png", "time_near_obstacle.png"):
         assert (out / png).stat().st_size > 10_000
+
+
+def test_evaluation_cli_groups_seeds_and_tests_agents_against_the_baseline(drone_run, tmp_path):
+    # A second seed of the same agent: an earlier model of the run, told apart by its run.json.
+    second = tmp_path / "seed4"
+    second.mkdir()
+    shutil.copy(drone_run / "checkpoints" / "ppo_128_steps.zip", second / "model.zip")
+    settings = json.loads((drone_run / "run.json").read_text())
+    (second / "run.json").write_text(json.dumps(settings | {"seed": 4}))
+    early = drone_run / "checkpoints" / "ppo_64_steps.zip"
+    out = tmp_path / "eval"
+    args = ["--episodes", "2", "--out", str(out)]
+    labels = ["--label", "two seeds", "--label", "two seeds", "--label", "early"]
+    models = ["--model", str(drone_run), "--model", str(second), "--model", str(early)]
+    run("evaluate", *models, *labels, *args)
+    md = (out / "results.md").read_text()
+    assert "## Paired tests against two seeds (two-sided p-values)" in md
+    assert md.count("| two seeds | `") == 2  # one row per seed's model
+    doc = json.loads((out / "results.json").read_text())
+    assert doc["baseline"] == "two seeds"
+    assert [e["config"] for e in doc["episodes"]["two seeds"]] == [0, 1, 0, 1]
+    assert doc["summaries"]["two seeds"]["episodes"] == 4
+    for ci in doc["intervals"].values():
+        assert ci["success"]["low"] <= ci["success"]["mean"] <= ci["success"]["high"]
+    tests = doc["tests"]["early"]
+    assert tests["success"]["pairs"] == 2  # 2 seeds vs 1: per-configuration majorities
+    assert all(0 <= t["pvalue"] <= 1 for t in tests.values())
+    # The final model and a checkpoint of the same run are not two seeds.
+    refused = run("evaluate", "--model", str(drone_run), "--model", str(early), *args, ok=False)
+    assert "two models trained with the same seed" in refused.stderr
 
 
 def test_an_exported_model_is_smaller_acts_the_same_and_evaluates(drone_run, tmp_path):

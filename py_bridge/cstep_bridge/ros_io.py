@@ -76,6 +76,12 @@ RESEND_S = 0.25
 REPLY_WAIT_SLICE_NS = 50_000_000
 # The node's batched evaluate service (its `evaluate_batch_service` parameter's default).
 SERVICE = "/cstep/evaluate_batch"
+# The most states one `/cstep/evaluate_batch` call carries. A reply the node's RustDDS writer has
+# to fragment (over ~1.3 kB: 9 "ok" states, or 8 with the longer collision statuses) never reaches
+# rclpy's Fast DDS client, and the client's reliable reply stream then stalls for good, every
+# later reply with it (measured 2026-12-02; the fix belongs in vendor/rustdds). Four states with
+# the longest statuses stay well under that; larger batches go as several calls.
+STATES_PER_CALL = 4
 
 
 class RewardTimeout(RuntimeError):
@@ -289,10 +295,13 @@ class RosBridge:
             )
 
     def _timed_out(self, what: str, timeout: float) -> RewardTimeout:
+        """The error for a reply that never came; with this bridge's own node, the end of its
+        log (a node stopped cleanly afterwards removes the log file)."""
+        log = "" if self.cstep is None else f"; its log:\n{self.cstep.log_tail()}"
         return RewardTimeout(
             f"no {what} from the cstep node within {timeout:.1f} s "
             f"(ROS_DOMAIN_ID {self.domain_id}, mode {self.mode!r}); is a `cstep node` "
-            "running on this domain with localhost discovery?"
+            f"running on this domain with localhost discovery?{log}"
         )
 
     def _spin_until(self, condition, timeout: float, what: str) -> None:
@@ -413,7 +422,11 @@ class RosBridge:
             )
         odoms = [odometry_msg(s, tt) for s, tt in zip(states, times, strict=True)]
         scans = [scan_msg(r, tt) for r, tt in zip(ranges_list, times, strict=True)]
-        return self._request(odoms, scans, goals, collisions)
+        answers: list[Reward] = []
+        for i in range(0, k, STATES_PER_CALL):
+            part = slice(i, i + STATES_PER_CALL)
+            answers += self._request(odoms[part], scans[part], goals[part], collisions[part])
+        return answers
 
     def _request(
         self,

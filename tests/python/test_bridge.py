@@ -186,6 +186,24 @@ def test_empowered_env_gets_finite_rewards_matching_cstep_eval_and_the_topic_pat
     assert bridge.cstep is None  # the node was stopped
 
 
+def test_a_batch_too_large_for_one_unfragmented_reply_is_answered_whole(ros_domain):
+    """Sixteen states, half reported in collision: one call's reply would be ~2.5 kB, which the
+    node's DDS writer fragments and rclpy never receives (this timed out, and stalled every later
+    reply, before batches were split into calls of STATES_PER_CALL)."""
+    bridge = RosBridge(domain_id=ros_domain, safety_coefficient=1.0, publish_sim_topics=False)
+    sim = DroneSim(arena(-0.9))
+    try:
+        state, ranges = sim.state(), sim.scan()
+        flags = [k % 2 == 1 for k in range(16)]
+        batch = bridge.evaluate_batch([state] * 16, [ranges] * 16, 1.0, [GOAL] * 16, flags)
+        assert [a.status == "robot already in collision" for a in batch] == flags
+        assert all(a.valid for a, flag in zip(batch, flags, strict=True) if not flag)
+        assert bridge.evaluate(state, ranges, 2.0).valid  # the node still answers
+    finally:
+        sim.close()
+        bridge.close()
+
+
 def test_a_batch_gets_each_states_own_answer_and_a_reported_collision_the_floor(ros_domain):
     """``evaluate_batch`` answers K states as K ``evaluate`` calls do, goals and collision flags
     per state; ``in_collision=True`` gets the node's floor reward for that state."""

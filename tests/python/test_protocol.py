@@ -82,22 +82,21 @@ def test_a_bad_hyperparameter_is_refused_with_its_name(bad, message, capsys):
     assert message in capsys.readouterr().err
 
 
-def test_squashed_gsde_builds_a_policy_whose_actions_stay_in_the_box(tmp_path):
-    args = parse_args(
-        [
-            "--protocol",
-            "tuned",
-            "--out",
-            "x",
-            "--hyperparams",
-            "use_sde=true",
-            "sde_sample_freq=8",
-            "n_steps=64",
-            "batch_size=64",
-            "policy_kwargs={squash_output: true, use_expln: true}",
-        ]
+def tuned_settings(*hyperparams: str) -> dict:
+    """The run settings of the tuned protocol with ``--hyperparams`` overrides."""
+    return run_settings(
+        parse_args(["--protocol", "tuned", "--out", "x", "--hyperparams", *hyperparams])
     )
-    s = run_settings(args)
+
+
+def test_squashed_gsde_builds_a_policy_whose_actions_stay_in_the_box(tmp_path):
+    s = tuned_settings(
+        "use_sde=true",
+        "sde_sample_freq=8",
+        "n_steps=64",
+        "batch_size=64",
+        "policy_kwargs={squash_output: true, use_expln: true}",
+    )
     assert s["squash_output"] and s["use_expln"] and s["net"] == [256, 256]  # others merged
     venv = make_vec_env(lambda: make_env("drone", empowered=False), n_envs=1, seed=3)
     try:
@@ -118,18 +117,8 @@ def test_bad_settings_are_named():
     args = parse_args(["--out", "x", "--hyperparams", "curriculum={levels: [0.5]}"])
     with pytest.raises(ValueError, match="end at 1"):
         run_settings(args)
-    args = parse_args(
-        [
-            "--protocol",
-            "tuned",
-            "--out",
-            "x",
-            "--hyperparams",
-            "policy_kwargs={squash_output: true}",
-        ]
-    )
     with pytest.raises(ValueError, match="squash_output needs use_sde"):
-        run_settings(args)
+        tuned_settings("policy_kwargs={squash_output: true}")
 
 
 def test_partway_goals_keep_clear_of_the_block():

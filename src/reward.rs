@@ -7,6 +7,8 @@
 
 use nalgebra::Vector3;
 
+use crate::estimator::EMPOWERMENT_FLOOR;
+
 /// The three numbers an RL loop needs.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Reward {
@@ -35,6 +37,22 @@ pub fn empowered_reward(empowerment: f64, safety_coefficient: f64, task_reward: 
     }
 }
 
+/// The lowest reward any state can score with safety coefficient `c`: the empowerment floor
+/// (a robot in collision) with the task reward in `[0, 1]` that makes it lowest — 1 while the
+/// floor's empowerment term is negative (`c` below `1 / MIN_FREE_VOLUME`), else 0. It answers
+/// input that cannot be scored, so that a malformed request never earns an agent more than a
+/// collision does.
+pub fn floor_reward(safety_coefficient: f64) -> Reward {
+    let at_floor =
+        |task_reward| empowered_reward(EMPOWERMENT_FLOOR, safety_coefficient, task_reward);
+    let (full, none) = (at_floor(1.0), at_floor(0.0));
+    if full.reward <= none.reward {
+        full
+    } else {
+        none
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -46,6 +64,19 @@ mod tests {
         assert_eq!(task_reward(&p, Some(&p)), 1.0);
         let goal = Vector3::new(4.0, 6.0, 1.0); // 5 m away
         assert!((task_reward(&p, Some(&goal)) - (-5.0f64).exp()).abs() < 1e-15);
+    }
+
+    #[test]
+    fn the_floor_reward_is_at_most_any_collision_score() {
+        for c in [1e-3, 0.5, 1.0, 9999.0, 1e4, 1e6] {
+            let floor = floor_reward(c);
+            assert_eq!(floor.empowerment_term, c.ln() + EMPOWERMENT_FLOOR);
+            assert_eq!(floor.reward, floor.task_reward * floor.empowerment_term);
+            for task in [0.0, 1e-9, 0.3, 1.0] {
+                let collision = empowered_reward(EMPOWERMENT_FLOOR, c, task);
+                assert!(floor.reward <= collision.reward, "c {c}, task {task}");
+            }
+        }
     }
 
     #[test]

@@ -42,7 +42,7 @@ use super::messages::{
 use super::stamps::{Order, StampOrder};
 use crate::config::{load_all, NodeSettings, DEFAULT_NODE_NAME};
 use crate::estimator::{Estimator, EMPOWERMENT_FLOOR};
-use crate::reward::{empowered_reward, task_reward};
+use crate::reward::{empowered_reward, floor_reward, task_reward};
 
 /// Runs the node until `stop` is set: loads the parameters files and `--ros-args`, joins the
 /// DDS domain `ROS_DOMAIN_ID` as far as `ROS_AUTOMATIC_DISCOVERY_RANGE` reaches
@@ -669,7 +669,8 @@ impl Shared {
     }
 
     /// The answer for a state that could not be scored: the floor, `valid = false`, `problem`
-    /// as the status, stamped with `header`.
+    /// as the status, stamped with `header`; its reward is the lowest a collision can score
+    /// ([`floor_reward`]), so malformed input never pays better than hitting a wall.
     fn rejected(&self, header: Header, problem: String, c: f64) -> (Empowerment, EmpoweredReward) {
         (
             Empowerment {
@@ -682,13 +683,7 @@ impl Shared {
                 status: problem,
                 ..Default::default()
             },
-            EmpoweredReward {
-                header,
-                empowerment_term: c.ln() + EMPOWERMENT_FLOOR,
-                safety_coefficient: c,
-                valid: false,
-                ..Default::default()
-            },
+            reward_message(header, &floor_reward(c), c, false),
         )
     }
 
@@ -946,6 +941,35 @@ mod tests {
             }
         }
         assert_eq!(node.latest().rejected, 3);
+    }
+
+    #[test]
+    fn a_malformed_request_never_scores_better_than_a_collision() {
+        // Issue 12, failure 9: a malformed request answered reward 0.0, better than the
+        // floor a robot touching a wall scores, so bad input paid.
+        for c in [0.2, 1.0, 3.0, 5e4] {
+            let node = shared(c);
+            let mut request = batch();
+            request.in_collision = vec![true, true, false, false];
+            request.scan[2].angle_increment = 0.0;
+            request.odom[3].pose.pose.position.x = f64::NAN;
+            let answer = node.evaluate_batch(&request);
+            let mut single = single(&request, 3);
+            single.scan.range_max = -1.0;
+            let alone = node.evaluate_request(&single).reward;
+            let collisions = &answer.reward[..2];
+            for (i, r) in answer.reward[2..].iter().chain([&alone]).enumerate() {
+                assert!(!r.valid);
+                for hit in collisions {
+                    assert!(
+                        r.reward <= hit.reward,
+                        "c {c}, rejected {i}: {r:?} vs {hit:?}"
+                    );
+                }
+                assert_eq!(r.reward, r.task_reward * r.empowerment_term, "{r:?}");
+                assert_eq!(r.empowerment_term, c.ln() + EMPOWERMENT_FLOOR);
+            }
+        }
     }
 
     #[test]

@@ -135,6 +135,10 @@ def test_evaluate_service_rejects_every_bad_field_by_name_and_never_answers_nan(
         assert e.status.startswith(field) and value in e.status, (field, value, e.status)
         for number in (e.empowerment, r.reward, r.task_reward, r.empowerment_term):
             assert math.isfinite(number), (field, e, r)
+        # Never better than a collision (failure 9: it answered 0.0): the floor's term with the
+        # task reward that makes it lowest.
+        assert r.empowerment_term == pytest.approx(math.log(r.safety_coefficient) + FLOOR)
+        assert r.reward == min(0.0, r.empowerment_term), (field, r)
 
     # Just inside the bounds, the same request is scored (at 999 m/s in a corridor every
     # trajectory collides, which is a score, not a rejection).

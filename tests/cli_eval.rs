@@ -246,6 +246,19 @@ fn malformed_inputs_fail_with_one_line_naming_file_and_field() {
         "pose.pose.orientation: is not a rotation",
     );
 
+    // Issue 12, failure 9: `[]` (and any non-object) read as the default message, a robot at
+    // rest at the origin.
+    for (name, text, kind) in [
+        ("array.json", "[]", "an array"),
+        ("number.json", " 3\n", "a number"),
+        ("null.json", "null", "null"),
+    ] {
+        let file = write(&dir, name, text);
+        let words = format!("not a valid message: expected a JSON object, got {kind}");
+        assert_clear_error(&eval(&file, &good_scan, &[]), name, &words);
+        assert_clear_error(&eval(&good_odom, &file, &[]), name, &words);
+    }
+
     let missing = dir.join("missing.json");
     assert_clear_error(
         &eval(&missing, &good_scan, &[]),

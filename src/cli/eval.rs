@@ -5,6 +5,7 @@ use std::path::{Path, PathBuf};
 use nalgebra::Vector3;
 use serde::de::DeserializeOwned;
 use serde::Serialize;
+use serde_json::Value;
 
 use cstep::config::{Settings, DEFAULT_NODE_NAME};
 use cstep::estimator::Estimator;
@@ -121,10 +122,25 @@ pub fn run(args: EvalArgs) -> Result<(), String> {
     Ok(())
 }
 
+/// The message in the JSON file at `path`: an object with the ROS field names. Anything else is
+/// refused — serde would read an array as the message's fields in order, and `[]` as the
+/// default message (a robot at rest at the origin).
 fn read_json<T: DeserializeOwned>(path: &Path) -> Result<T, String> {
     let text = cstep::input_file::read_to_string(path)
         .map_err(|e| format!("{}: cannot read the file: {e}", path.display()))?;
-    serde_json::from_str(&text).map_err(|e| format!("{}: not a valid message: {e}", path.display()))
+    let invalid =
+        |e: &dyn std::fmt::Display| format!("{}: not a valid message: {e}", path.display());
+    let kind = match serde_json::from_str(&text).map_err(|e| invalid(&e))? {
+        Value::Object(_) => return serde_json::from_str(&text).map_err(|e| invalid(&e)),
+        Value::Array(_) => "an array",
+        Value::String(_) => "a string",
+        Value::Number(_) => "a number",
+        Value::Bool(_) => "a boolean",
+        Value::Null => "null",
+    };
+    Err(invalid(&format_args!(
+        "expected a JSON object, got {kind} (the message's fields by their ROS names)"
+    )))
 }
 
 /// The `--goal X,Y[,Z]` position (Z defaults to the robot's height), checked as the node checks

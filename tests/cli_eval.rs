@@ -259,6 +259,16 @@ fn malformed_inputs_fail_with_one_line_naming_file_and_field() {
         assert_clear_error(&eval(&good_odom, &file, &[]), name, &words);
     }
 
+    // Issue 12, failure 9: narrowed to float32 first, this was reported as "got inf".
+    let mut wide = serde_json::to_value(corridor_scan()).unwrap();
+    wide["angle_increment"] = serde_json::json!(1e300);
+    let wide = write(&dir, "wide.json", &wide.to_string());
+    assert_clear_error(
+        &eval(&good_odom, &wide, &[]),
+        "wide.json",
+        "angle_increment: 1e300 does not fit the message's float32",
+    );
+
     let missing = dir.join("missing.json");
     assert_clear_error(
         &eval(&missing, &good_scan, &[]),

@@ -159,25 +159,32 @@ pub struct Odometry {
 
 /// `sensor_msgs/LaserScan`. In JSON, `null` (rosbridge's encoding of non-finite numbers) and
 /// the strings `"inf"`, `"-inf"`, `"nan"` are accepted in `ranges` and `intensities`; `null`
-/// reads as `+inf` (no return), the value rosbridge most often stands it in for.
+/// reads as `+inf` (no return), the value rosbridge most often stands it in for. A number given
+/// for an angle or range limit that no `float32` holds (`1e300`, `1e-50`) is refused naming the
+/// field and the number as written, not narrowed to `inf` or 0 and reported as that.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 #[serde(default)]
 pub struct LaserScan {
     /// Stamp of the first beam and the sensor frame.
     pub header: Header,
     /// Bearing of the first beam, radians.
+    #[serde(deserialize_with = "float32::angle_min")]
     pub angle_min: f32,
     /// Bearing of the last beam, radians.
+    #[serde(deserialize_with = "float32::angle_max")]
     pub angle_max: f32,
     /// Bearing step, radians.
+    #[serde(deserialize_with = "float32::angle_increment")]
     pub angle_increment: f32,
     /// Time between beams, seconds.
     pub time_increment: f32,
     /// Time between scans, seconds.
     pub scan_time: f32,
     /// Shortest measurable range, metres.
+    #[serde(deserialize_with = "float32::range_min")]
     pub range_min: f32,
     /// Longest measurable range, metres.
+    #[serde(deserialize_with = "float32::range_max")]
     pub range_max: f32,
     /// Ranges, metres (REP 117 for non-finite values).
     #[serde(deserialize_with = "lenient_floats::deserialize")]
@@ -481,6 +488,41 @@ ros_messages!(
     MarkerArray
 );
 
+/// Scalar `float32` fields that refuse, in JSON, a number no `float32` holds: a finite number
+/// beyond ±`f32::MAX` or a non-zero one that rounds to zero. One function per field, so that the
+/// error names it; binary formats (CDR) carry a `float32` already and pass through.
+mod float32 {
+    use serde::de::{Deserializer, Error};
+    use serde::Deserialize;
+
+    /// The `f32` the JSON number for `field` is, or why it is none.
+    fn narrow<'de, D: Deserializer<'de>>(deserializer: D, field: &str) -> Result<f32, D::Error> {
+        if !deserializer.is_human_readable() {
+            return f32::deserialize(deserializer);
+        }
+        let wide = f64::deserialize(deserializer)?;
+        let narrow = wide as f32;
+        if narrow.is_infinite() && wide.is_finite() || narrow == 0.0 && wide != 0.0 {
+            return Err(D::Error::custom(format_args!(
+                "{field}: {wide:?} does not fit the message's float32 (magnitudes {:e} to {:e})",
+                f32::from_bits(1),
+                f32::MAX
+            )));
+        }
+        Ok(narrow)
+    }
+
+    macro_rules! fields {
+        ($($field:ident),*) => {$(
+            pub fn $field<'de, D: Deserializer<'de>>(deserializer: D) -> Result<f32, D::Error> {
+                narrow(deserializer, stringify!($field))
+            }
+        )*};
+    }
+
+    fields!(angle_min, angle_max, angle_increment, range_min, range_max);
+}
+
 /// Float arrays that read JSON's stand-ins for non-finite numbers and pass binary formats
 /// through untouched. `cdr-encoding` (the DDS wire format) reports `is_human_readable() ==
 /// false`, so CDR sees a plain `sequence<float32>`, NaN bits and all (`tests/cdr_roundtrip.rs`).
@@ -562,6 +604,28 @@ mod tests {
         assert_eq!(scan.ranges[5], 2.0);
         let err = serde_json::from_str::<LaserScan>(r#"{"ranges":["far"]}"#).unwrap_err();
         assert!(err.to_string().contains("\"far\""), "{err}");
+    }
+
+    #[test]
+    fn scan_json_limits_beyond_float32_are_refused_as_given() {
+        // Issue 12, failure 9: 1e300 narrowed to inf and was reported as "got inf".
+        for (json, words) in [
+            (
+                r#"{"angle_increment": 1e300}"#,
+                "angle_increment: 1e300 does not fit the message's float32",
+            ),
+            (r#"{"range_max": -4e38}"#, "range_max: -4e38 does not fit"),
+            (r#"{"angle_min": 1e-50}"#, "angle_min: 1e-50 does not fit"),
+        ] {
+            let err = serde_json::from_str::<LaserScan>(json).unwrap_err();
+            assert!(err.to_string().contains(words), "{err}");
+        }
+        let scan: LaserScan =
+            serde_json::from_str(r#"{"angle_min": -3, "range_max": 3.4e38, "angle_max": 1e-45}"#)
+                .unwrap();
+        assert_eq!(scan.angle_min, -3.0);
+        assert_eq!(scan.range_max, 3.4e38);
+        assert_eq!(scan.angle_max, 1e-45);
     }
 
     #[test]

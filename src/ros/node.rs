@@ -322,7 +322,7 @@ async fn serve(shared: &Arc<Shared>, ports: &Ports, node: &Node) {
     let odometry = ports.odom.async_stream().for_each(|received| async move {
         match received {
             Ok((odom, _)) => shared.latest().odom = Some((odom, Instant::now())),
-            Err(e) => shared.undecodable("odometry", &e),
+            Err(e) => shared.undecodable("odometry", "message", &e),
         }
     });
     let goals = ports.goal.async_stream().for_each(|received| async move {
@@ -334,13 +334,13 @@ async fn serve(shared: &Arc<Shared>, ports: &Ports, node: &Node) {
                     Err(e) => shared.note_problem(|l| l.rejected += 1, &format!("goal_pose: {e}")),
                 }
             }
-            Err(e) => shared.undecodable("goal_pose", &e),
+            Err(e) => shared.undecodable("goal_pose", "message", &e),
         }
     });
     let scans = ports.scan.async_stream().for_each(|received| async move {
         let scan = match received {
             Ok((scan, _)) => scan,
-            Err(e) => return shared.undecodable("scan", &e),
+            Err(e) => return shared.undecodable("scan", "message", &e),
         };
         // Matched readers of our writers, as the spinner records DDS matching.
         let scores_wanted = ports.empowerment.get_subscription_count(node) > 0
@@ -393,7 +393,9 @@ async fn serve(shared: &Arc<Shared>, ports: &Ports, node: &Node) {
 }
 
 /// Answers each request `server` receives with `answer`, until the request stream ends; a reply
-/// that cannot be sent is noted for diagnostics (`name` says which service's).
+/// that cannot be sent is noted for diagnostics (`name` says which service's). A request that
+/// cannot be decoded is counted as rejected like an undecodable topic message; it cannot be
+/// answered, as ros2-client drops its request id with the payload.
 async fn answer_requests<Req, Resp>(
     shared: &Shared,
     server: &Server<Req, Resp>,
@@ -407,10 +409,13 @@ async fn answer_requests<Req, Resp>(
     server
         .receive_request_stream()
         .for_each(|received| async move {
-            if let Ok((id, request)) = received {
-                if let Err(e) = server.async_send_response(id, answer(&request)).await {
-                    shared.latest().last_problem = Some(format!("{name} reply failed: {e:?}"));
+            match received {
+                Ok((id, request)) => {
+                    if let Err(e) = server.async_send_response(id, answer(&request)).await {
+                        shared.latest().last_problem = Some(format!("{name} reply failed: {e:?}"));
+                    }
                 }
+                Err(e) => shared.undecodable(name, "request", &e),
             }
         })
         .await;
@@ -591,13 +596,13 @@ impl Shared {
             .unwrap_or_else(|e| e.into_inner())
     }
 
-    /// Counts a message the subscription to `input` could not decode (malformed CDR: a length
-    /// past the end of the buffer, a truncated buffer) as rejected, and has the next diagnostics
-    /// say so: it is dropped like any malformed input, not silently.
-    fn undecodable(&self, input: &str, error: &ros2_client::ReadError) {
+    /// Counts a `what` (a message, a request) that `input` could not decode (malformed CDR: a
+    /// length past the end of the buffer, a truncated buffer) as rejected, and has the next
+    /// diagnostics say so: it is dropped like any malformed input, not silently.
+    fn undecodable(&self, input: &str, what: &str, error: &ros2_client::ReadError) {
         self.note_problem(
             |l| l.rejected += 1,
-            &format!("{input}: undecodable message dropped: {error}"),
+            &format!("{input}: undecodable {what} dropped: {error}"),
         );
     }
 

@@ -1,0 +1,155 @@
+//! `cstep node` over real DDS (localhost, a private domain): a service request that is not
+//! decodable CDR is dropped, counted in the diagnostics' `inputs_rejected` and named there, as
+//! an undecodable topic message is (issue 12, failure 9: the servers dropped it uncounted).
+
+use std::process::{Child, Command, Stdio};
+use std::time::Duration;
+
+use cstep::ros::context::context_from_env;
+use cstep::ros::messages::{DiagnosticArray, LaserScan, Odometry};
+use futures::StreamExt;
+use ros2_client::qos::{History, WhenFull};
+use ros2_client::{
+    Message, MessageTypeName, Name, NodeName, NodeOptions, QosProfile, ServiceMapping,
+    ServiceTypeName,
+};
+use serde::{Deserialize, Serialize};
+
+/// A private domain for this test process: 101–220, clear of the Python tests' 1–100, offset by
+/// the process id so that two runs on one machine are unlikely to share it.
+fn domain() -> String {
+    (101 + std::process::id() % 120).to_string()
+}
+
+/// How long discovery and the diagnostics may take before the test gives up.
+const PATIENCE: Duration = Duration::from_secs(60);
+
+/// What the test sends as a `cstep_msgs/Evaluate` request: one byte, where the odometry's
+/// header should begin.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+struct OneByte(u8);
+
+impl Message for OneByte {}
+
+/// The node under test, killed when dropped.
+struct NodeProcess(Child);
+
+impl Drop for NodeProcess {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
+#[test]
+fn an_undecodable_evaluate_request_is_counted_and_named_in_diagnostics() {
+    // This process joins the domain through the same reading of the environment as the node.
+    std::env::set_var("ROS_DOMAIN_ID", domain());
+    std::env::set_var("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST");
+    std::env::remove_var("ROS_LOCALHOST_ONLY");
+    std::env::remove_var("ROS_STATIC_PEERS");
+    let _node = NodeProcess(
+        Command::new(env!("CARGO_BIN_EXE_cstep"))
+            .args(["node", "--exit-with-parent"])
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .spawn()
+            .expect("cstep node starts"),
+    );
+
+    let context = context_from_env(true).unwrap();
+    let mut peer = context
+        .new_node(
+            NodeName::new("/", "undecodable_peer").unwrap(),
+            NodeOptions::new().enable_rosout(false),
+        )
+        .unwrap();
+    let qos = QosProfile::default()
+        .reliability_reliable(WhenFull::Wait(Duration::from_millis(100)))
+        .history(History::KeepLast { depth: 10 });
+    let client = peer
+        .create_client::<OneByte, OneByte>(
+            ServiceMapping::Enhanced,
+            &Name::parse("/cstep/evaluate").unwrap(),
+            &ServiceTypeName::new("cstep_msgs", "Evaluate"),
+            qos.clone(),
+            qos.clone(),
+        )
+        .unwrap();
+    let topic = peer
+        .create_topic(
+            &Name::parse("/diagnostics").unwrap(),
+            MessageTypeName::new("diagnostic_msgs", "DiagnosticArray"),
+            &qos,
+        )
+        .unwrap();
+    let diagnostics = peer
+        .create_subscription::<DiagnosticArray>(&topic, None)
+        .unwrap();
+    // Diagnostics name the last problem only while the inputs are fresh: feed valid ones.
+    let publisher = |name: &str, package: &str, kind: &str| {
+        let topic = Name::parse(name).unwrap();
+        peer.create_topic(&topic, MessageTypeName::new(package, kind), &qos)
+            .unwrap()
+    };
+    let odom_topic = publisher("/odom", "nav_msgs", "Odometry");
+    let scan_topic = publisher("/scan", "sensor_msgs", "LaserScan");
+    let odom = peer
+        .create_publisher::<Odometry>(&odom_topic, None)
+        .unwrap();
+    let scan = peer
+        .create_publisher::<LaserScan>(&scan_topic, None)
+        .unwrap();
+    let increment = std::f32::consts::TAU / 180.0;
+    let beams = LaserScan {
+        angle_min: -std::f32::consts::PI,
+        angle_max: -std::f32::consts::PI + increment * 179.0,
+        angle_increment: increment,
+        range_min: 0.1,
+        range_max: 3.0,
+        ranges: vec![2.0; 180],
+        ..Default::default()
+    };
+    let executor = smol::LocalExecutor::new();
+    executor.spawn(peer.spinner().unwrap().spin()).detach();
+    executor
+        .spawn(async {
+            loop {
+                // A lost sample is made up for by the next.
+                let _ = odom.publish(Odometry::default());
+                let _ = scan.publish(beams.clone());
+                smol::Timer::after(Duration::from_millis(100)).await;
+            }
+        })
+        .detach();
+
+    let sent = 3;
+    let exchange = async {
+        client.wait_for_service(&peer).await;
+        for _ in 0..sent {
+            client.async_send_request(OneByte(7)).await.unwrap();
+        }
+        let mut stream = std::pin::pin!(diagnostics.async_stream());
+        while let Some(received) = stream.next().await {
+            let Ok((array, _)) = received else { continue };
+            let Some(status) = array.status.first() else {
+                continue;
+            };
+            let rejected = status.values.iter().find(|kv| kv.key == "inputs_rejected");
+            if rejected.is_some_and(|kv| kv.value == sent.to_string()) && status.level == 1 {
+                return Some(status.message.clone());
+            }
+        }
+        None
+    };
+    let give_up = async {
+        smol::Timer::after(PATIENCE).await;
+        None
+    };
+    let said = smol::block_on(executor.run(smol::future::or(exchange, give_up)));
+    let message = said.expect("diagnostics count the undecodable requests");
+    assert!(
+        message.starts_with("evaluate: undecodable request dropped: "),
+        "{message}"
+    );
+}

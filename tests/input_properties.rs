@@ -21,9 +21,13 @@ use cstep::ros::convert::{
 use cstep::ros::messages::{Header, LaserScan, Odometry, Point, Quaternion, Vector3};
 use proptest::prelude::*;
 
-/// Longest error message accepted: every value in it printed compactly (issue 12, failure 9:
-/// a 1e-160 component once printed 160 digits).
+/// Longest error message accepted.
 const MAX_ERROR_CHARS: usize = 320;
+
+/// Longest number in an error message: an `f64` printed shortest-roundtrip takes at most 24
+/// characters (`-2.2250738585072014e-308`); issue 12, failure 9: a 1e-160 component printed
+/// 160 digits.
+const MAX_NUMBER_CHARS: usize = 24;
 
 /// Numbers from every class an `f64` has, weighted towards the edges: proptest's full range
 /// (NaN, ±inf, subnormals, zeros, normals), extreme magnitudes, and everyday values.
@@ -248,7 +252,8 @@ fn estimators() -> &'static [(Estimator, f64)] {
     })
 }
 
-/// Asserts an error is what the contract promises: a field, and one short line.
+/// Asserts an error is what the contract promises: a field, and one short line with every
+/// number in it printed compactly.
 fn check_error(error: &InputError) -> Result<(), TestCaseError> {
     let text = error.to_string();
     prop_assert!(!error.field.is_empty(), "{text}");
@@ -257,6 +262,14 @@ fn check_error(error: &InputError) -> Result<(), TestCaseError> {
         text.chars().count() <= MAX_ERROR_CHARS,
         "{} chars: {text}",
         text.len()
+    );
+    let longest_number = text
+        .split(|c: char| !(c.is_ascii_digit() || ".eE+-".contains(c)))
+        .map(str::len)
+        .max();
+    prop_assert!(
+        longest_number <= Some(MAX_NUMBER_CHARS),
+        "a long number: {text}"
     );
     Ok(())
 }

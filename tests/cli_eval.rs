@@ -53,6 +53,21 @@ fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
     path
 }
 
+/// Writes the valid odometry and the corridor scan into `dir`; their paths.
+fn write_valid_inputs(dir: &Path) -> (PathBuf, PathBuf) {
+    let odom = write(
+        dir,
+        "odom.json",
+        &serde_json::to_string(&odometry()).unwrap(),
+    );
+    let scan = write(
+        dir,
+        "scan.json",
+        &serde_json::to_string(&corridor_scan()).unwrap(),
+    );
+    (odom, scan)
+}
+
 fn eval(odom: &Path, scan: &Path, extra: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_cstep"))
         .arg("eval")
@@ -89,16 +104,7 @@ fn assert_clear_error(output: &Output, file: &str, words: &str) {
 #[test]
 fn json_output_has_every_message_field_and_finite_values() {
     let dir = workdir("ok");
-    let odom = write(
-        &dir,
-        "odom.json",
-        &serde_json::to_string(&odometry()).unwrap(),
-    );
-    let scan = write(
-        &dir,
-        "scan.json",
-        &serde_json::to_string(&corridor_scan()).unwrap(),
-    );
+    let (odom, scan) = write_valid_inputs(&dir);
     let out = json_of(&eval(
         &odom,
         &scan,
@@ -168,16 +174,7 @@ fn rosbridge_nulls_in_ranges_are_accepted() {
 #[test]
 fn malformed_inputs_fail_with_one_line_naming_file_and_field() {
     let dir = workdir("bad");
-    let good_odom = write(
-        &dir,
-        "odom.json",
-        &serde_json::to_string(&odometry()).unwrap(),
-    );
-    let good_scan = write(
-        &dir,
-        "scan.json",
-        &serde_json::to_string(&corridor_scan()).unwrap(),
-    );
+    let (good_odom, good_scan) = write_valid_inputs(&dir);
 
     let broken = write(&dir, "broken.json", "{\"ranges\": [1.0, 2.0");
     assert_clear_error(
@@ -325,16 +322,7 @@ fn endless_special_and_oversized_input_files_are_refused_naming_them() {
     // Issue 12, failure 7: /dev/zero as any input was read until memory ran out, a FIFO blocked
     // forever. Each is refused in one line naming the path and what it is.
     let dir = workdir("special");
-    let odom = write(
-        &dir,
-        "odom.json",
-        &serde_json::to_string(&odometry()).unwrap(),
-    );
-    let scan = write(
-        &dir,
-        "scan.json",
-        &serde_json::to_string(&corridor_scan()).unwrap(),
-    );
+    let (odom, scan) = write_valid_inputs(&dir);
     let device = "it is a character device, not a regular file";
     let zero = Path::new("/dev/zero");
     assert_clear_error(&eval(zero, &scan, &[]), "/dev/zero", device);

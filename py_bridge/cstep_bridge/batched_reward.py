@@ -3,10 +3,11 @@
 An empowered env in ``reward_mode="deferred"`` (:mod:`~cstep_bridge.env`) steps its simulation
 and leaves what the node needs, a :class:`~cstep_bridge.env.RewardRequest`, in its ``info``.
 :class:`BatchedReward` wraps a vector of such envs (DummyVecEnv or SubprocVecEnv): after each
-vector step it sends every env's request in one ``/cstep/evaluate_batch`` call to one node, which
-scores them in parallel, and fills in the rewards. Each env gets exactly the reward it would get
-from a node of its own (the same numbers, bit for bit), for one round trip instead of N and one
-node process instead of N, and with no ``/odom``, ``/scan``, ``/clock`` traffic for observers.
+vector step it sends every env's request to one node through ``/cstep/evaluate_batch`` (calls of
+at most :data:`~cstep_bridge.ros_io.STATES_PER_CALL` states, which the node scores in parallel),
+and fills in the rewards. Each env gets exactly the reward it would get from a node of its own
+(the same numbers, bit for bit), for N / STATES_PER_CALL round trips instead of N and one node
+process instead of N, and with no ``/odom``, ``/scan``, ``/clock`` traffic for observers.
 
 Where the time of an empowered step went before (``py-spy --idle`` on the single-env trainer,
 tuned protocol, 117 steps/s, the machine's two cores shared with two other training runs): a
@@ -36,7 +37,7 @@ from .env import REWARD_REQUEST
 
 
 class BatchedReward(VecEnvWrapper):
-    """Fills the rewards of a vector of deferred empowered envs with one node call per step.
+    """Fills the rewards of a vector of deferred empowered envs from one node, batched per step.
 
     ``bridge``: a service-mode :class:`~cstep_bridge.ros_io.RosBridge` to use (not closed here);
     None starts one, and its private node, with the envs' own bridge arguments (they must agree:

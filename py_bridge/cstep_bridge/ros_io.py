@@ -8,8 +8,8 @@ Two ways to get the reward:
 
 - ``mode="service"`` (default): one ``/cstep/evaluate_batch`` call carrying the odometry, the scan
   and the goal of one state (:meth:`RosBridge.evaluate`) or of K states
-  (:meth:`RosBridge.evaluate_batch`: one round trip for a whole vector step, the node scores the
-  states in parallel). The reply is computed from exactly the request — deterministic for the
+  (:meth:`RosBridge.evaluate_batch`: a whole vector step in calls of at most
+  :data:`STATES_PER_CALL` states, each scored by the node in parallel). The reply is computed from exactly the request — deterministic for the
   node's seed, synchronous, no matching by stamp; each state gets the numbers ``/cstep/evaluate``
   gives it alone. The topic path cannot promise that: the node pairs each scan with the *newest*
   odometry it has, checks odometry age against its own wall clock (a paused or

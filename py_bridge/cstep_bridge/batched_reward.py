@@ -68,7 +68,7 @@ class BatchedReward(VecEnvWrapper):
         return self.venv.reset()
 
     def step_wait(self) -> VecEnvStepReturn:
-        """Steps the envs, then scores their states in one call; ``infos`` come out as an
+        """Steps the envs, then scores their states through the bridge; ``infos`` come out as an
         undeferred env's (the node's task_reward, empowerment, reward_valid; no request)."""
         obs, _, dones, infos = self.venv.step_wait()
         try:

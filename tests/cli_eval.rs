@@ -343,12 +343,7 @@ fn endless_special_and_oversized_input_files_are_refused_naming_them() {
     assert_clear_error(&out, "/dev/zero", device);
 
     let fifo = dir.join("scan.fifo");
-    let _ = std::fs::remove_file(&fifo);
-    assert!(Command::new("mkfifo")
-        .arg(&fifo)
-        .status()
-        .unwrap()
-        .success());
+    common::make_fifo(&fifo);
     assert_clear_error(&eval(&odom, &fifo, &[]), "scan.fifo", "it is a FIFO");
 
     let large = dir.join("large.json");

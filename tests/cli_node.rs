@@ -1,6 +1,8 @@
 //! `cstep node` refusing what it cannot run: one clear line and a non-zero exit before it joins
 //! a DDS domain, never a panic or an abort.
 
+mod common;
+
 use std::process::{Command, Output};
 
 fn node(ros_args: &[&str]) -> Output {
@@ -41,12 +43,7 @@ fn a_parameters_file_that_never_ends_is_refused_at_start() {
         "/dev/zero: cannot read the file: it is a character device, not a regular file",
     );
     let fifo = std::env::temp_dir().join(format!("cstep-node-params-{}.fifo", std::process::id()));
-    let _ = std::fs::remove_file(&fifo);
-    assert!(Command::new("mkfifo")
-        .arg(&fifo)
-        .status()
-        .unwrap()
-        .success());
+    common::make_fifo(&fifo);
     let fifo_arg = fifo.display().to_string();
     assert_refused(&node(&["--params-file", &fifo_arg]), "it is a FIFO");
     std::fs::remove_file(&fifo).unwrap();

@@ -1,5 +1,5 @@
-//! Helpers shared by the integration tests: estimators from parameter overrides, and scans of
-//! simple scenes.
+//! Helpers shared by the integration tests: estimators from parameter overrides, scans of
+//! simple scenes, and a FIFO to feed the CLI.
 #![allow(dead_code)]
 
 use cstep::config::Settings;
@@ -40,4 +40,16 @@ pub fn at(x: f64, y: f64) -> RobotState {
 pub fn score(estimator: &Estimator, scene: &Scene, state: &RobotState) -> Estimate {
     let scan = paper_scan(scene, state.position.xy());
     estimator.evaluate(state, &scan)
+}
+
+/// A fresh FIFO at `path` (replacing any file there): an input that never ends, which the CLI must
+/// refuse rather than block on.
+pub fn make_fifo(path: &std::path::Path) {
+    let _ = std::fs::remove_file(path);
+    let made = std::process::Command::new("mkfifo").arg(path).status();
+    assert!(
+        made.expect("mkfifo runs").success(),
+        "mkfifo {}",
+        path.display()
+    );
 }

@@ -95,6 +95,18 @@ fn vector(c: impl Strategy<Value = f64> + Clone) -> impl Strategy<Value = Vector
     (c.clone(), c.clone(), c).prop_map(|(x, y, z)| Vector3 { x, y, z })
 }
 
+/// Odometry with these pose and twist parts (the rest default).
+fn odometry(
+    (position, orientation, linear, angular): (Point, Quaternion, Vector3, Vector3),
+) -> Odometry {
+    let mut odom = Odometry::default();
+    odom.pose.pose.position = position;
+    odom.pose.pose.orientation = orientation;
+    odom.twist.twist.linear = linear;
+    odom.twist.twist.angular = angular;
+    odom
+}
+
 /// Odometry with every field the validation reads drawn from [`wild_f64`].
 fn wild_odometry() -> impl Strategy<Value = Odometry> {
     let quaternion = (wild_f64(), wild_f64(), wild_f64(), wild_f64())
@@ -105,14 +117,7 @@ fn wild_odometry() -> impl Strategy<Value = Odometry> {
         vector(wild_f64()),
         vector(wild_f64()),
     )
-        .prop_map(|(position, orientation, linear, angular)| {
-            let mut odom = Odometry::default();
-            odom.pose.pose.position = position;
-            odom.pose.pose.orientation = orientation;
-            odom.twist.twist.linear = linear;
-            odom.twist.twist.angular = angular;
-            odom
-        })
+        .prop_map(odometry)
 }
 
 /// A scan with every field the validation reads drawn independently.
@@ -184,14 +189,7 @@ fn valid_odometry() -> impl Strategy<Value = Odometry> {
         rate(MAX_SPEED),
         rate(MAX_ANGULAR_RATE),
     )
-        .prop_map(|(position, orientation, linear, angular)| {
-            let mut odom = Odometry::default();
-            odom.pose.pose.position = position;
-            odom.pose.pose.orientation = orientation;
-            odom.twist.twist.linear = linear;
-            odom.twist.twist.angular = angular;
-            odom
-        })
+        .prop_map(odometry)
 }
 
 /// A scan the validation must accept: its beams spanning up to one turn either way round,

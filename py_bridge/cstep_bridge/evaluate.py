@@ -13,12 +13,14 @@ policy. Evaluation needs no reward, so no ``cstep node`` runs. Writes to ``--out
   within 0.1 … 0.5 m of an obstacle; its decrease relative to the first agent (the baseline); for
   the maze also which route each agent took. Each mean over seeds and configurations comes with
   its 95 % bootstrap interval, and each agent's p-values against the baseline (paired tests on the
-  same configurations) are tabled.
+  same configurations) are tabled; for the drone, the paper's own numbers beside ours.
 - ``results.json``: every summary, interval and test, and every episode's outcome.
 - ``paths.png``: the flown paths over the map (the drone: the first six configurations; of each
   agent's first seed).
 - ``time_near_obstacle.png``: mean time within a distance of an obstacle against the distance,
   with its 95 % interval as a band.
+- ``training_curves.png``: training and validation success over training steps, mean and range
+  over each agent's seeds (from the history an exported model keeps, or its run's monitor).
 
 The metrics are defined in :mod:`cstep_bridge.metrics`, the intervals and tests in
 :mod:`cstep_bridge.comparison`.
@@ -38,9 +40,10 @@ from typing import Any
 
 import numpy as np
 
-from . import comparison, metrics
+from . import comparison, metrics, paper_results, training_log
 from .envs import ENV_NAMES, make_env
-from .plots import MapPanel, Path2D, paths_figure, threshold_figure
+from .paper_results import PaperAgent
+from .plots import MapPanel, Path2D, paths_figure, threshold_figure, training_curves
 
 FINE_THRESHOLDS = tuple(np.round(np.arange(0.05, 0.501, 0.025), 3))
 DRONE_PANELS = 6
@@ -56,6 +59,8 @@ class Agent:
     env: str
     steps: int
     seed: int | None = None
+    paper: PaperAgent | None = None
+    """What the paper reports for this agent (drone only), from run.json's agent and c."""
 
 
 def find_agent(path: Path, label: str | None) -> Agent:
@@ -71,11 +76,27 @@ def find_agent(path: Path, label: str | None) -> Agent:
     from stable_baselines3.common.save_util import load_from_zip_file
 
     data, _, _ = load_from_zip_file(model, device="cpu", load_data=True)
+    agent = settings.get("agent", model.stem)
     if label is None:
-        agent = settings.get("agent", model.stem)
         label = f"empowered c={settings['c']:g}" if agent == "empowered" else agent
     steps = int(data.get("num_timesteps", 0))
-    return Agent(label, model, settings.get("env", ""), steps, settings.get("seed"))
+    env = settings.get("env", "")
+    paper = paper_results.drone_agent(agent, settings.get("c")) if env == "drone" else None
+    return Agent(label, model, env, steps, settings.get("seed"), paper)
+
+
+def history(agent: Agent) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """The training episodes and validations of ``agent``'s run, where its directory (an exported
+    model's ``training.csv``, a run's ``monitor/``) or its run's (for a checkpoint) keeps them."""
+    episodes = validations = None
+    for d in (agent.model.parent, agent.model.parent.parent):
+        if episodes is None and (d / training_log.TRAINING_CSV).exists():
+            episodes = training_log.read_episodes(d / training_log.TRAINING_CSV)
+        elif episodes is None and (d / "monitor").is_dir():
+            episodes = training_log.read_monitor(d / "monitor")
+        if validations is None and (d / training_log.VALIDATION_CSV).exists():
+            validations = training_log.read_validation(d / training_log.VALIDATION_CSV)
+    return episodes, validations
 
 
 def group_seeds(models: list[Agent]) -> dict[str, list[Agent]]:
@@ -222,9 +243,11 @@ def markdown(
     command: str,
 ) -> str:
     """results.md: the paper's tables for these agents (by label: their models, each seed's
-    ``runs``, the ``intervals`` and ``summaries`` of those, and the ``tests`` against the first)."""
+    ``runs``, the ``intervals`` and ``summaries`` of those, and the ``tests`` against the first),
+    with the paper's own numbers beside ours where it reports that agent."""
     n = len(next(iter(runs.values()))[0])
     th = metrics.THRESHOLDS
+    papers = {label: models[0].paper for label, models in groups.items()}
     head = "| Distance threshold (m) | " + " | ".join(f"{d:g}" for d in th) + " |"
     rule = "|---|" + "---|" * len(th)
     lines = [
@@ -269,14 +292,19 @@ def markdown(
                 "compare the paper's numbers with that column."
             ),
             "",
-            "| Agent | Success rate | Avg. clear time (s) | Collision rate | Cleared rate |",
-            "|---|---:|---:|---:|---:|",
+            (
+                "| Agent | Success rate | Avg. clear time (s) | Collision rate | Cleared rate | "
+                "Paper: success rate | Paper: avg. clear time (s) |"
+            ),
+            "|---|---:|---:|---:|---:|---:|---:|",
         ]
-        lines += [
-            f"| {label} | {_ci(ci['success'], '%')} | {_ci(ci['clear_time'])} | "
-            f"{_ci(ci['collision'], '%')} | {_ci(ci['cleared'], '%')} |"
-            for label, ci in intervals.items()
-        ]
+        for label, ci in intervals.items():
+            paper = papers[label]
+            theirs = f"{paper.success:.0%} | {paper.clear_time:.2f}" if paper else "– | –"
+            lines.append(
+                f"| {label} | {_ci(ci['success'], '%')} | {_ci(ci['clear_time'])} | "
+                f"{_ci(ci['collision'], '%')} | {_ci(ci['cleared'], '%')} | {theirs} |"
+            )
     if env == "maze":
         lines += [
             "",
@@ -314,6 +342,11 @@ def markdown(
         for label, s in list(summaries.items())[1:]:
             cut = metrics.decrease(s, base)
             lines.append(f"| {label} | " + " | ".join(_fmt(cut[d], ".1f", "%") for d in th) + " |")
+        reported = [(lb, p.decrease) for lb, p in papers.items() if p and p.decrease]
+        lines += [
+            f"| {label} (paper) | " + " | ".join(f"{v:.1f}%" for v in cut) + " |"
+            for label, cut in reported
+        ]
         named = {"success": "Success"} | ({"clear_time": "Clear time"} if clear_x(env) else {})
         named |= {f"within_{d:g}": f"Within {d:g} m" for d in th}
         lines += [
@@ -506,7 +539,15 @@ def main(argv: list[str] | None = None) -> int:
         out / "time_near_obstacle.png",
         title=f"{env}: time near obstacles (bands: 95 % intervals)",
     )
-    print(f"wrote {out / 'results.md'}, results.json, paths.png, time_near_obstacle.png")
+    training_curves(
+        {label: [history(m) for m in models] for label, models in groups.items()},
+        out / "training_curves.png",
+        title=f"{env}: training across seeds (line: mean, band: range)",
+    )
+    print(
+        f"wrote {out / 'results.md'}, results.json, paths.png, time_near_obstacle.png, "
+        "training_curves.png"
+    )
     return 0
 
 

@@ -1,5 +1,7 @@
 """Export a trained model as a small run directory to commit: ``run.json`` + ``model.zip`` with
-the policy's weights only (+ ``vecnormalize.pkl`` when the policy expects normalised inputs).
+the policy's weights only (+ ``vecnormalize.pkl`` when the policy expects normalised inputs), and
+the run's history for curves across seeds: ``training.csv`` (every training episode) and
+``validation.csv`` (when the protocol validates).
 
     python -m cstep_bridge.export runs/drone-unempowered --which best \\
         --out docs/results/drone/models/unempowered-pilot
@@ -18,6 +20,7 @@ import shutil
 import sys
 from pathlib import Path
 
+from . import training_log
 from .normalization import stats_path
 
 MAX_BYTES = 5_000_000
@@ -34,8 +37,9 @@ def source_model(run: Path, which: str) -> Path:
 
 
 def export(run: Path, which: str, out: Path) -> Path:
-    """Writes ``out/run.json``, ``out/model.zip`` (policy weights only) and the normalisation
-    statistics the policy needs, if any; returns the model's path."""
+    """Writes ``out/run.json``, ``out/model.zip`` (policy weights only), the normalisation
+    statistics the policy needs, if any, and the run's training history; returns the model's
+    path."""
     from stable_baselines3 import PPO
 
     src = source_model(run, which)
@@ -52,6 +56,11 @@ def export(run: Path, which: str, out: Path) -> Path:
     stats = stats_path(src)
     if stats.exists():
         shutil.copyfile(stats, stats_path(target))
+    episodes = training_log.read_monitor(run / "monitor")
+    if len(episodes):
+        training_log.write_episodes(episodes, out / training_log.TRAINING_CSV)
+    if (run / training_log.VALIDATION_CSV).exists():
+        shutil.copyfile(run / training_log.VALIDATION_CSV, out / training_log.VALIDATION_CSV)
     size = target.stat().st_size
     if size > MAX_BYTES:
         raise SystemExit(f"{target}: {size} bytes, more than the {MAX_BYTES} a commit may take")

@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import csv
-import json
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -16,34 +14,73 @@ import numpy as np
 from matplotlib.patches import Rectangle
 
 from .comparison import Interval
+from .training_log import read_monitor
 
 Rect = tuple[float, float, float, float]  # x0, y0, x1, y1
-
-
-def read_monitor(monitor_dir: Path) -> np.ndarray:
-    """Every episode of SB3's Monitor CSVs in ``monitor_dir`` in the order they ended, as rows of
-    (training step at the episode's end, reward, success)."""
-    rows = []
-    for path in sorted(Path(monitor_dir).glob("*.monitor.csv")):
-        with path.open() as f:
-            header = f.readline()
-            if not header.startswith("#"):
-                raise ValueError(f"{path}: not a Monitor file (no '#' header line)")
-            json.loads(header[1:])
-            for rec in csv.DictReader(f):
-                success = rec.get("success", "False") in ("True", "1", "1.0")
-                rows.append((float(rec["t"]), int(rec["l"]), float(rec["r"]), float(success)))
-    rows.sort()
-    if not rows:
-        return np.zeros((0, 3))
-    a = np.array(rows)
-    return np.column_stack([np.cumsum(a[:, 1]), a[:, 2], a[:, 3]])
 
 
 def _smooth(values: np.ndarray, window: int) -> np.ndarray:
     window = max(1, min(window, len(values)))
     kernel = np.ones(window) / window
     return np.convolve(values, kernel, mode="valid")
+
+
+SEED_WINDOW = 100
+"""Episodes in the moving average of a seed's training success in :func:`training_curves`."""
+
+
+def _band(ax, x: np.ndarray, curves: np.ndarray, color: str, label: str) -> None:
+    """The mean of ``curves`` (seeds × points) as a line and their range as a band."""
+    ax.plot(x, curves.mean(axis=0), color=color, label=label)
+    if len(curves) > 1:
+        ax.fill_between(x, curves.min(axis=0), curves.max(axis=0), color=color, alpha=0.2)
+
+
+def training_curves(
+    agents: Mapping[str, Sequence[tuple[np.ndarray | None, np.ndarray | None]]],
+    png: Path,
+    title: str = "",
+) -> None:
+    """Training across seeds, per agent: its seeds' training success rate (moving average of
+    :data:`SEED_WINDOW` episodes, :func:`~cstep_bridge.training_log.read_monitor`'s rows) and
+    validation success rate (``validation.csv`` rows) over training steps — the mean over seeds as
+    a line, their range as a band. Each agent maps to one (episodes, validations) pair per seed;
+    either may be None where a seed lacks it."""
+    fig, (ax_t, ax_v) = plt.subplots(2, 1, figsize=(7, 6), sharex=True)
+    for k, (label, seeds) in enumerate(agents.items()):
+        color = f"C{k}"
+        runs = [e for e, _ in seeds if e is not None and len(e) >= SEED_WINDOW]
+        if runs:
+            grid = np.linspace(runs[0][SEED_WINDOW - 1, 0], min(e[-1, 0] for e in runs), 200)
+            curves = np.array(
+                [
+                    np.interp(grid, e[SEED_WINDOW - 1 :, 0], 100 * _smooth(e[:, 2], SEED_WINDOW))
+                    for e in runs
+                ]
+            )
+            _band(ax_t, grid, curves, color, f"{label} ({len(runs)} seeds)")
+        vals = [v for _, v in seeds if v is not None and len(v)]
+        if vals:
+            steps = sorted(set.intersection(*(set(v[:, 0]) for v in vals)))
+            curves = np.array([[100 * v[v[:, 0] == s, 1][0] for s in steps] for v in vals]).reshape(
+                len(vals), len(steps)
+            )
+            _band(ax_v, np.array(steps), curves, color, f"{label} ({len(vals)} seeds)")
+    for ax, what in (
+        (ax_t, f"training success (%, last {SEED_WINDOW} episodes)"),
+        (ax_v, "validation success (%)"),
+    ):
+        ax.set_ylabel(what)
+        ax.set_ylim(-5, 105)
+        if ax.lines:
+            ax.legend(loc="upper left", fontsize=8)
+        else:
+            ax.text(0.5, 0.5, "no data", ha="center", transform=ax.transAxes)
+    ax_v.set_xlabel("training steps")
+    fig.suptitle(title or "training across seeds (line: mean, band: range)")
+    fig.tight_layout()
+    fig.savefig(png, dpi=120)
+    plt.close(fig)
 
 
 def training_curve(monitor_dir: Path, png: Path, title: str = "") -> None:

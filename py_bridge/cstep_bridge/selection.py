@@ -24,6 +24,8 @@ from typing import Any
 
 import numpy as np
 
+from .training_log import VALIDATION_CSV
+
 DRONE_SEED = 7_331
 """Seed of the drone's validation arenas (not the evaluation set's)."""
 MAZE_SEED = 7_332
@@ -94,7 +96,7 @@ def make_callback(env_name: str, validation: Validation, out: Path):
     from .envs import make_env
     from .normalization import stats_path
 
-    log = out / "validation.csv"
+    log = out / VALIDATION_CSV
 
     class BestOnValidation(BaseCallback):
         """See the module docstring."""

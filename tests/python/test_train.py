@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from cstep_bridge import training_log
 from cstep_bridge.evaluate import Agent, group_seeds
 from stable_baselines3 import PPO
 
@@ -156,6 +157,8 @@ def test_evaluation_cli_writes_the_tables_and_plots(drone_run, tmp_path):
     assert "| Agent | Success rate | Avg. clear time (s) |" in md
     assert "| final |" in md and "| early |" in md
     assert "Decrease in time near obstacles relative to final" in md
+    # Both are unempowered drone agents (run.json): the paper's 82 % and 6.56 s beside each.
+    assert md.count("| 82% | 6.56 |") == 2
     doc = json.loads((out / "results.json").read_text())
     assert doc["env"] == "drone"
     for label in ("final", "early"):
@@ -163,7 +166,7 @@ def test_evaluation_cli_writes_the_tables_and_plots(drone_run, tmp_path):
         assert [e["config"] for e in eps] == [0, 1]
         assert all(0 < e["duration"] <= 30.0 + 1e-9 for e in eps)
         assert doc["summaries"][label]["episodes"] == 2
-    for png in ("paths.png", "time_near_obstacle.png"):
+    for png in ("paths.png", "time_near_obstacle.png", "training_curves.png"):
         assert (out / png).stat().st_size > 10_000
 
 
@@ -200,7 +203,8 @@ def test_evaluation_cli_groups_seeds_and_tests_agents_against_the_baseline(drone
 def test_an_exported_model_is_smaller_acts_the_same_and_evaluates(drone_run, tmp_path):
     out = tmp_path / "models" / "unempowered-s3"
     run("export", str(drone_run), "--which", "final", "--out", str(out))
-    assert sorted(p.name for p in out.iterdir()) == ["model.zip", "run.json"]  # no statistics
+    # No statistics (not normalised), no validations (not validated), no episode ended (192 steps).
+    assert sorted(p.name for p in out.iterdir()) == ["model.zip", "run.json"]
     assert (out / "model.zip").stat().st_size < (drone_run / "model.zip").stat().st_size / 2
     exported = json.loads((out / "run.json").read_text())
     assert exported["exported_from"]["steps"] == 192 and exported["env"] == "drone"
@@ -214,6 +218,25 @@ def test_an_exported_model_is_smaller_acts_the_same_and_evaluates(drone_run, tmp
     assert "unempowered: 1 episodes on drone" in proc.stdout
     refused = run("export", str(drone_run), "--out", str(tmp_path / "x"), ok=False)  # no best
     assert "no best_model.zip to export" in refused.stderr
+
+
+def test_an_export_keeps_the_runs_training_episodes_and_validations(tmp_path):
+    """What ``evaluate`` draws curves across seeds from: ``training.csv`` and ``validation.csv``."""
+    src = tmp_path / "run"
+    run(
+        "train",
+        *("--env", "maze", "--agent", "unempowered", "--protocol", "tuned", "--n-envs", "1"),
+        *("--timesteps", "640", "--vec-env", "dummy", "--out", str(src), *TINY),
+        *("--hyperparams", "validation={every: 320, episodes: 2}", "curriculum=null"),
+    )
+    out = tmp_path / "export"
+    run("export", str(src), "--which", "best", "--out", str(out))
+    names = ["model.zip", "run.json", "training.csv", "validation.csv", "vecnormalize.pkl"]
+    assert sorted(p.name for p in out.iterdir()) == names
+    kept = training_log.read_episodes(out / "training.csv")
+    assert len(kept) >= 2  # 300-step maze episodes
+    assert np.allclose(kept, training_log.read_monitor(src / "monitor"), atol=1e-4)
+    assert training_log.read_validation(out / "validation.csv")[:, 0].tolist() == [320, 640]
 
 
 @pytest.mark.parametrize("log_std, low, high", [(3.0, 90, 100), (-5.0, 0, 5)])

@@ -49,6 +49,7 @@ _DEFAULTS: dict[str, Any] = {
     "collision_value": "none",
     "curriculum": None,
     "validation": None,
+    "noise_cap": None,
 }
 SETTING_NAMES = (
     "net",
@@ -75,6 +76,7 @@ SETTING_NAMES = (
     "collision_value",
     "curriculum",
     "validation",
+    "noise_cap",
 )
 """The run settings a protocol section becomes (:func:`settings`), in ``run.json``'s order."""
 _POLICY_KEYS = {
@@ -142,6 +144,7 @@ def settings(hyper: dict[str, Any]) -> dict[str, Any]:
         "collision_value": str(hyper["collision_value"]),
         "curriculum": hyper["curriculum"],
         "validation": hyper["validation"],
+        "noise_cap": hyper["noise_cap"],
     }
     check(out)
     return out
@@ -158,6 +161,8 @@ def check(s: dict[str, Any]) -> None:
     for name in ("squash_output", "use_expln"):
         if s.get(name) and not s["use_sde"]:
             raise ValueError(f"policy_kwargs.{name} needs use_sde (SB3 has it for gSDE only)")
+    if s.get("noise_cap") and not s["use_sde"]:
+        raise ValueError("noise_cap needs use_sde (it caps gSDE's exploration noise)")
     if s["lr_schedule"] not in ("constant", "linear"):
         raise ValueError(f"lr_schedule must be constant or linear, not {s['lr_schedule']!r}")
     for name in ("learning_rate", "n_steps", "batch_size", "n_epochs", "clip_range"):

@@ -167,10 +167,12 @@ def run_settings(args: argparse.Namespace) -> dict[str, Any]:
             settings[name] = getattr(args, option)
     protocol.check(settings)
     from .curriculum import Curriculum
+    from .noise_cap import NoiseCap
     from .selection import Validation
 
     Curriculum.from_settings(settings["curriculum"])  # raises ValueError naming what is wrong
     Validation.from_settings(settings["validation"])
+    NoiseCap.from_settings(settings["noise_cap"])
     return {
         "env": args.env,
         "agent": args.agent,
@@ -269,7 +271,7 @@ def _callbacks(out: Path, settings: dict[str, Any]):
     from stable_baselines3.common.callbacks import BaseCallback, CallbackList
     from stable_baselines3.common.vec_env import VecNormalize
 
-    from . import curriculum, selection
+    from . import curriculum, noise_cap, selection
 
     checkpoint_every = settings["checkpoint_every"]
 
@@ -293,10 +295,10 @@ def _callbacks(out: Path, settings: dict[str, Any]):
             return True
 
     class CStepLog(BaseCallback):
-        """Logs success/collision rates, empowerment, obstacle distance and the share of sampled
+        """Logs success/collision rates, empowerment, obstacle distance, the share of sampled
         actions outside the action box (clipped: their noise tells the env nothing; a share
-        near 1 means the policy's noise has swamped its mean) for each rollout, and the
-        wall-clock minutes since this (part of the) run started."""
+        near 1 means the policy's noise has swamped its mean) and gSDE's noise std for each
+        rollout, and the wall-clock minutes since this (part of the) run started."""
 
         def _on_training_start(self) -> None:
             self.training_started = time.monotonic()
@@ -336,6 +338,12 @@ def _callbacks(out: Path, settings: dict[str, Any]):
             self.logger.record("cstep/min_obstacle_distance_mean", np.mean(self.distance))
             self.logger.record("cstep/clipped_action_share", np.mean(self.clipped))
             fields["clipped"] = f"{np.mean(self.clipped):4.0%}"
+            if self.model.use_sde:  # gSDE's exploration noise before squashing, largest component
+                obs = self.model.rollout_buffer.observations
+                sample = obs.reshape(-1, obs.shape[-1])[:: max(1, obs.shape[0] // 32)]
+                noise = float(noise_cap.noise_std(self.model.policy, sample).max())
+                self.logger.record("cstep/noise_std", noise)
+                fields["noise"] = f"{noise:5.2f}"
             rate = (self.num_timesteps - self.start_steps) / (time.monotonic() - self.started)
             fields["steps/s"] = f"{rate:6.0f}"
             fields["min"] = f"{(time.monotonic() - self.training_started) / 60:6.1f}"
@@ -345,6 +353,9 @@ def _callbacks(out: Path, settings: dict[str, Any]):
     plan = curriculum.Curriculum.from_settings(settings["curriculum"])
     if plan is not None:
         callbacks.append(curriculum.make_callback(plan, out / "curriculum.json"))
+    cap = noise_cap.NoiseCap.from_settings(settings.get("noise_cap"))  # absent in older runs
+    if cap is not None:
+        callbacks.append(noise_cap.make_callback(cap))
     validation = selection.Validation.from_settings(settings["validation"])
     if validation is not None:
         callbacks.append(selection.make_callback(settings["env"], validation, out))

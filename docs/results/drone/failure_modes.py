@@ -1,0 +1,125 @@
+"""Where does a drone policy fail, and how does it act? Flies a model's deterministic policy on the
+evaluation arenas and reports success by how close the goal lies to a wall, where the failed
+episodes ended, and how saturated the actions are (for a tanh-squashed gSDE policy also the size
+of its pre-squash mean and exploration noise).
+
+    PYTHONPATH=py_bridge .venv/bin/python docs/results/drone/failure_modes.py \\
+        --model docs/results/drone/models/unempowered-d17 --episodes 100
+
+The evaluation set is ``data/drone_eval_set.json`` (as ``cstep_bridge.evaluate`` flies it).
+"""
+
+from __future__ import annotations
+
+import argparse
+import itertools
+from pathlib import Path
+
+import numpy as np
+import torch
+from cstep_bridge.env import CStepDroneEnv
+from cstep_bridge.evaluate import configurations, reset_options
+from cstep_bridge.normalization import observation_normalizer
+from stable_baselines3 import PPO
+
+WALL_BINS = (0.0, 0.3, 0.6, 10.0)
+"""Edges (m) of the bins of the goal's distance to the nearest arena wall."""
+SATURATED = 0.95
+"""An action component beyond this magnitude counts as saturated (the box is [−1, 1])."""
+
+
+def wall_distance(env: CStepDroneEnv, xy: np.ndarray) -> float:
+    """Distance (m) from ``xy`` to the nearest of the arena's four walls (not the block)."""
+    x0, y0, x1, y1 = env.sim.arena.bounds
+    return float(min(xy[0] - x0, x1 - xy[0], xy[1] - y0, y1 - xy[1]))
+
+
+def noise_and_mean(model: PPO, observations: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+    """Per observation, the pre-squash mean |μ| and gSDE noise std per action component; None
+    for a policy without squashed gSDE."""
+    policy = model.policy
+    if not (policy.use_sde and policy.squash_output):
+        return None
+    with torch.no_grad():
+        obs = torch.as_tensor(observations, dtype=torch.float32)
+        latent, _ = policy.mlp_extractor(policy.extract_features(obs))
+        mean = policy.action_net(latent)
+        std = policy.action_dist.get_std(policy.log_std)
+        noise = ((latent**2) @ (std**2)).sqrt()
+    return mean.abs().numpy(), noise.numpy()
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--model", type=Path, required=True, help="a run or model directory, or .zip")
+    ap.add_argument("--episodes", type=int, default=100)
+    args = ap.parse_args()
+    path = args.model / "model.zip" if args.model.is_dir() else args.model
+    model = PPO.load(path, device="cpu")
+    norm = observation_normalizer(path) or (lambda obs: obs)
+    env = CStepDroneEnv(empowered=False)
+    rows, observations, actions = [], [], []
+    try:
+        for config in configurations("drone")[: args.episodes]:
+            obs, info = env.reset(options=reset_options("drone", config))
+            done = False
+            while not done:
+                o = norm(obs)
+                action = model.predict(o, deterministic=True)[0]
+                observations.append(o)
+                actions.append(action)
+                obs, _, terminated, truncated, info = env.step(action)
+                done = terminated or truncated
+            goal = env.sim.goal[:2]
+            rows.append(
+                (
+                    wall_distance(env, goal),
+                    info["success"],
+                    info["collision"],
+                    info["distance_to_goal"],
+                    *info["position"],
+                    *goal,
+                )
+            )
+    finally:
+        env.close()
+    a = np.array(rows, dtype=float)
+    wall, success, collision, final = a[:, 0], a[:, 1], a[:, 2], a[:, 3]
+    print(f"# {path}: {len(a)} evaluation arenas\n")
+    print(f"success {success.mean():.0%}, collisions {collision.mean():.0%}\n")
+    print("| goal's distance to a wall (m) | arenas | success | median final distance (m) |")
+    print("|---|---:|---:|---:|")
+    for lo, hi in itertools.pairwise(WALL_BINS):
+        sel = (wall >= lo) & (wall < hi)
+        if sel.any():
+            print(
+                f"| {lo:g}–{hi:g} | {sel.sum()} | {success[sel].mean():.0%} | "
+                f"{np.median(final[sel]):.2f} |"
+            )
+    failed = (success == 0) & (collision == 0)
+    if failed.any():
+        ends = a[failed][:, 4:6]
+        print(
+            f"\nfailed without a collision: {failed.sum()} arenas; they ended at x "
+            f"{np.median(ends[:, 0]):.2f} (median), y {np.median(ends[:, 1]):.2f}, "
+            f"{np.median(final[failed]):.2f} m from the goal; ending point's wall distance "
+            f"{np.median([wall_distance(env, e) for e in ends]):.2f} m (goals': "
+            f"{np.median(wall[failed]):.2f} m)"
+        )
+    acts = np.abs(np.array(actions))
+    print(f"\nactions saturated (|a| > {SATURATED}): {np.mean(acts > SATURATED):.0%} of components")
+    stats = noise_and_mean(model, np.array(observations))
+    if stats is not None:
+        mean, noise = stats
+        q = (0.1, 0.5, 0.9)
+        print(
+            "pre-squash |mean| quantiles 10/50/90 %: "
+            + ", ".join(f"{v:.2f}" for v in np.quantile(mean, q))
+            + "; gSDE noise std: "
+            + ", ".join(f"{v:.2f}" for v in np.quantile(noise, q))
+        )
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

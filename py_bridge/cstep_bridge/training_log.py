@@ -33,8 +33,9 @@ def read_monitor(monitor_dir: Path) -> np.ndarray:
     The envs of a vector env step in lockstep, so an episode that ends after an env's ``k``-th
     step ends at training step ``n_envs · k``, which counts steps exactly whatever the clock did. A
     Monitor's own time cannot order a resumed run: the resumed part appends to each file with
-    its clock restarted at 0. (Episodes cut short when a run stopped leave no row, so each resume
-    can undercount by up to one episode per env.)"""
+    its clock restarted at 0. Across a resume the count is approximate: episodes cut short when
+    the run stopped leave no row (undercounting up to one episode per env), and episodes after
+    the checkpoint it resumed from are flown again (overcounting up to one checkpoint interval)."""
     files = sorted(Path(monitor_dir).glob("*.monitor.csv"))
     rows = []
     for index, path in enumerate(files):

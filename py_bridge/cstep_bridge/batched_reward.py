@@ -3,10 +3,10 @@
 An empowered env in ``reward_mode="deferred"`` (:mod:`~cstep_bridge.env`) steps its simulation
 and leaves what the node needs, a :class:`~cstep_bridge.env.RewardRequest`, in its ``info``.
 :class:`BatchedReward` wraps a vector of such envs (DummyVecEnv or SubprocVecEnv): after each
-vector step it sends every env's request to one node through ``/cstep/evaluate_batch`` (calls of
-at most :data:`~cstep_bridge.ros_io.STATES_PER_CALL` states, which the node scores in parallel),
-and fills in the rewards. Each env gets exactly the reward it would get from a node of its own
-(the same numbers, bit for bit), for N / STATES_PER_CALL round trips instead of N and one node
+vector step it sends every env's request to one node in one ``/cstep/evaluate_batch`` call
+(several calls beyond :data:`~cstep_bridge.ros_io.STATES_PER_CALL`, 32, envs), which the node
+scores in parallel, and fills in the rewards. Each env gets exactly the reward it would get from
+a node of its own (the same numbers, bit for bit), for one round trip instead of N and one node
 process instead of N, and with no ``/odom``, ``/scan``, ``/clock`` traffic for observers.
 
 Where the time of an empowered step went before (``py-spy --idle`` on the single-env trainer,

@@ -20,7 +20,9 @@ An empowered env gets its reward in one of three ``reward_mode`` s. ``"service"`
 one of their own (with a private node). ``"deferred"`` asks none: ``step`` returns a NaN reward
 and leaves a :class:`RewardRequest` in ``info[REWARD_REQUEST]``, and a
 :class:`~cstep_bridge.batched_reward.BatchedReward` vec env wrapper scores the requests of all
-its envs together, in batched node calls per vector step, and fills the rewards in (what the trainer does).
+its envs in one node call per vector step (several beyond
+:data:`~cstep_bridge.ros_io.STATES_PER_CALL` envs) and fills the rewards in (what the trainer
+does).
 """
 
 from __future__ import annotations

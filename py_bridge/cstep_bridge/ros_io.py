@@ -9,14 +9,15 @@ Two ways to get the reward:
 - ``mode="service"`` (default): one ``/cstep/evaluate_batch`` call carrying the odometry, the scan
   and the goal of one state (:meth:`RosBridge.evaluate`) or of K states
   (:meth:`RosBridge.evaluate_batch`: a whole vector step in calls of at most
-  :data:`STATES_PER_CALL` states, each scored by the node in parallel). The reply is computed from exactly the request — deterministic for the
-  node's seed, synchronous, no matching by stamp; each state gets the numbers ``/cstep/evaluate``
-  gives it alone. The topic path cannot promise that: the node pairs each scan with the *newest*
-  odometry it has, checks odometry age against its own wall clock (a paused or
-  faster-than-real-time simulation reads as stale), keeps only the latest scan when busy, and the
-  scan travels best-effort (sensor-data QoS), so a reward can be skipped. The simulation topics
-  are for observers only here, and ``publish_sim_topics=False`` skips them (the trainer does:
-  they cost a quarter of the reward call's time).
+  :data:`STATES_PER_CALL` states, each scored by the node in parallel). The reply is computed
+  from exactly the request — deterministic for the node's seed, synchronous, no matching by
+  stamp; each state gets the numbers ``/cstep/evaluate`` gives it alone. The topic path cannot
+  promise that: the node pairs each scan with the *newest* odometry it has, checks odometry age
+  against its own wall clock (a paused or faster-than-real-time simulation reads as stale), keeps
+  only the latest scan when busy, and the scan travels best-effort (sensor-data QoS), so a
+  reward can be skipped. The simulation topics are for observers only here, and
+  ``publish_sim_topics=False`` skips them (the trainer does: they cost a quarter of the reward
+  call's time).
 - ``mode="topic"``: publish ``/odom`` then ``/scan`` and wait for the ``/cstep/reward`` message
   whose stamp equals the scan's; the goal goes out on ``goal_pose``. A state the caller reports
   in collision still goes to the service (the topics cannot say so).
@@ -76,12 +77,13 @@ RESEND_S = 0.25
 REPLY_WAIT_SLICE_NS = 50_000_000
 # The node's batched evaluate service (its `evaluate_batch_service` parameter's default).
 SERVICE = "/cstep/evaluate_batch"
-# The most states one `/cstep/evaluate_batch` call carries. A reply the node's RustDDS writer has
-# to fragment (over ~1.3 kB: 9 "ok" states, or 8 with the longer collision statuses) never reaches
-# rclpy's Fast DDS client, and the client's reliable reply stream then stalls for good, every
-# later reply with it (measured 2026-12-02; the fix belongs in vendor/rustdds). Four states with
-# the longest statuses stay well under that; larger batches go as several calls.
-STATES_PER_CALL = 4
+# The most states one `/cstep/evaluate_batch` call carries; larger batches go as several calls.
+# 32 states make a request of 48 kB, which Fast DDS still sends as one datagram, and a reply of
+# 4.6-5.4 kB, which the node's RustDDS writer sends as DATA_FRAGs (every reply over ~1.3 kB, 9
+# states, is fragmented; until vendor/rustdds's fix of their inline QoS, CSTEP_PATCH.md section
+# 3, no fragmented reply reached rclpy and calls were capped at 4 states). The tuned protocols'
+# 8 envs go in one call: two calls of 4 cost ~1.5 ms more a vector step (measured 2026-12-02).
+STATES_PER_CALL = 32
 
 
 class RewardTimeout(RuntimeError):

@@ -10,9 +10,9 @@ agents learn the task (``docs/results/protocol.md``). Single options (``--gamma`
 and ``--hyperparams KEY=VALUE`` override entries. Every agent of a comparison trains with the same
 protocol: the levers in it (normalisation, curriculum, model selection, ...) apply to all alike.
 An empowered agent's environments share one private ``cstep node`` on a ROS domain of their own
-(localhost only), which scores all of them together, in batched service calls per vector step
-(:mod:`~cstep_bridge.batched_reward`); with ``--reward-mode topic`` each environment starts a
-node of its own instead.
+(localhost only), which scores all of them in one service call per vector step (several beyond
+32 environments: :mod:`~cstep_bridge.batched_reward`); with ``--reward-mode topic`` each
+environment starts a node of its own instead.
 
 The run directory ``--out`` holds:
 

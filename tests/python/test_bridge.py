@@ -186,19 +186,27 @@ def test_empowered_env_gets_finite_rewards_matching_cstep_eval_and_the_topic_pat
     assert bridge.cstep is None  # the node was stopped
 
 
-def test_a_batch_too_large_for_one_unfragmented_reply_is_answered_whole(ros_domain):
-    """Sixteen states, half reported in collision: one call's reply would be ~2.5 kB, which the
-    node's DDS writer fragments and rclpy never receives (this timed out, and stalled every later
-    reply, before batches were split into calls of STATES_PER_CALL)."""
+def test_a_batch_whose_reply_must_be_fragmented_is_answered_whole_in_one_call(ros_domain):
+    """Sixteen states, half reported in collision, in ONE ``/cstep/evaluate_batch`` call: the
+    reply (2.5 kB) is over the node's 1452-byte datagram budget, so its RustDDS writer sends it
+    as DATA_FRAGs carrying the request's identity as inline QoS. Before vendor/rustdds's fix of
+    that inline QoS (CSTEP_PATCH.md section 3) rclpy's Fast DDS dropped every fragment: this
+    timed out, and every later reply stalled behind the lost one. A second fragmented reply
+    (through ``evaluate_batch``) and a small one follow it."""
     bridge = RosBridge(domain_id=ros_domain, safety_coefficient=1.0, publish_sim_topics=False)
     sim = DroneSim(arena(-0.9))
     try:
         state, ranges = sim.state(), sim.scan()
         flags = [k % 2 == 1 for k in range(16)]
-        batch = bridge.evaluate_batch([state] * 16, [ranges] * 16, 1.0, [GOAL] * 16, flags)
+        odoms = [odometry_msg(state, 1.0)] * 16
+        scans = [scan_msg(ranges, 1.0)] * 16
+        # One call whatever STATES_PER_CALL is (evaluate_batch would split a larger batch).
+        batch = bridge._request(odoms, scans, [GOAL] * 16, flags)
         assert [a.status == "robot already in collision" for a in batch] == flags
         assert all(a.valid for a, flag in zip(batch, flags, strict=True) if not flag)
-        assert bridge.evaluate(state, ranges, 2.0).valid  # the node still answers
+        again = bridge.evaluate_batch([state] * 16, [ranges] * 16, 1.0, [GOAL] * 16, flags)
+        assert [a.reward for a in again] == [a.reward for a in batch]  # deterministic
+        assert bridge.evaluate(state, ranges, 2.0).valid  # the reply stream still flows
     finally:
         sim.close()
         bridge.close()

@@ -971,6 +971,89 @@ mod tests {
     assert_eq!(generic_multi, fast_multi);
   }
 
+  // cstep patch: a fragment of a service reply, as the writer builds and sends it
+  // (MessageBuilder::data_frag_msg, then write_to_vec_fast), is read back whole,
+  // related sample identity included. Unpatched, the DATA_FRAG body was one byte
+  // longer than its header said and its inline QoS unreadable (by Fast DDS too).
+  #[test]
+  fn data_frag_with_related_sample_identity_round_trips() {
+    use crate::{
+      dds::with_key::datawriter::WriteOptionsBuilder,
+      messages::submessages::elements::{
+        inline_qos::InlineQos, serialized_payload::SerializedPayload, RepresentationIdentifier,
+      },
+      structure::{guid::EntityKind, rpc::SampleIdentity},
+    };
+
+    let writer_guid = GUID::dummy_test_guid(EntityKind::WRITER_NO_KEY_USER_DEFINED);
+    let identity = SampleIdentity {
+      writer_guid: GUID::dummy_test_guid(EntityKind::WRITER_NO_KEY_USER_DEFINED),
+      sequence_number: SequenceNumber::new(7),
+    };
+    let value: Vec<u8> = (0..=255).cycle().take(2313).collect(); // 2317 bytes with the header
+    let change = CacheChange::new(
+      writer_guid,
+      SequenceNumber::new(2),
+      WriteOptionsBuilder::new()
+        .related_sample_identity(identity)
+        .build(),
+      DDSData::new(SerializedPayload::new(
+        RepresentationIdentifier::CDR_LE,
+        value,
+      )),
+    );
+    let sample = change.data_value.bytes_slice(0, 2317).to_vec();
+    let reader = EntityId::new([0, 0x13, 0], EntityKind::READER_NO_KEY_USER_DEFINED);
+    // The last run (fragments 9 and 10, 269 bytes) and a middle one (5 to 8).
+    for (start, count) in [(9u32, 2u16), (5, 4)] {
+      let message = MessageBuilder::new()
+        .data_frag_msg(
+          &change,
+          reader,
+          writer_guid,
+          FragmentNumber::new(start),
+          count,
+          256,
+          2317,
+          Endianness::LittleEndian,
+          None,
+        )
+        .add_header_and_build(writer_guid.prefix);
+      let bytes = message.write_to_vec_fast(Endianness::LittleEndian).unwrap();
+      let declared = 20 + 4 + usize::from(message.submessages[0].header.content_length);
+      assert_eq!(
+        bytes.len(),
+        declared,
+        "fragment {start}: header length vs bytes"
+      );
+
+      let read = Message::read_from_buffer(&Bytes::from(bytes)).unwrap();
+      let [submessage] = &read.submessages[..] else {
+        panic!("fragment {start}: {:?}", read.submessages);
+      };
+      let SubmessageBody::Writer(WriterSubmessage::DataFrag(df, flags)) = &submessage.body else {
+        panic!("fragment {start}: not a DATA_FRAG: {submessage:?}");
+      };
+      assert!(flags.contains(DATAFRAG_Flags::InlineQos));
+      assert_eq!(
+        (df.reader_id, df.writer_id, df.writer_sn),
+        (reader, writer_guid.entity_id, SequenceNumber::new(2))
+      );
+      assert_eq!(
+        (df.fragment_starting_num, df.fragments_in_submessage),
+        (FragmentNumber::new(start), count)
+      );
+      let from = (start as usize - 1) * 256;
+      let to = (from + usize::from(count) * 256).min(2317);
+      assert_eq!(&df.serialized_payload[..], &sample[from..to]);
+      let inline_qos = df.inline_qos.as_ref().expect("inline QoS");
+      assert_eq!(
+        InlineQos::related_sample_identity(inline_qos, RepresentationIdentifier::CDR_LE).unwrap(),
+        Some(identity)
+      );
+    }
+  }
+
   #[test]
   fn try_submessage_content_length_rejects_overflow() {
     assert!(try_submessage_content_length(65535).is_ok());

@@ -301,8 +301,15 @@ impl<C: Context> Writable<C> for DataFrag {
     writer.write_value(&self.fragments_in_submessage)?;
     writer.write_value(&self.fragment_size)?;
     writer.write_value(&self.data_size)?;
-    if self.inline_qos.is_some() && !self.inline_qos.as_ref().unwrap().parameters.is_empty() {
-      writer.write_value(&self.inline_qos)?;
+    // cstep patch: write the ParameterList itself, as Data does. This wrote the
+    // `Option<ParameterList>`, which speedy serializes with a one-byte `Some` tag
+    // (0x01) in front: the inline QoS then started one byte late (Fast DDS read
+    // PID 0x8301 of length 6144 and dropped every DATA_FRAG carrying inline QoS,
+    // i.e. every fragmented service reply) and the submessage was one byte longer
+    // than `len_serialized`, the length its header declares. Written whenever
+    // present (an empty list is its sentinel), as `len_serialized` counts it.
+    if let Some(inline_qos) = self.inline_qos.as_ref() {
+      writer.write_value(inline_qos)?;
     }
     writer.write_bytes(&self.serialized_payload)?;
     Ok(())
@@ -332,6 +339,66 @@ mod tests {
     df.write_to_stream_with_ctx(Endianness::LittleEndian, &mut buf)
       .expect("serialize DataFrag body");
     Bytes::from(buf)
+  }
+
+  // cstep patch: a DATA_FRAG carrying inline QoS, as every fragment of a
+  // fragmented service reply does (the related sample identity, under both
+  // PIDs), laid out as RTPS 2.5 section 9.4.5.4 says and read back whole.
+  #[test]
+  fn inline_qos_starts_right_after_sample_size_and_round_trips() {
+    use crate::{
+      messages::submessages::elements::parameter::Parameter,
+      structure::{guid::EntityKind, parameter_id::ParameterId},
+    };
+
+    let identity: Vec<u8> = (1..=24).collect(); // a GUID (16 bytes) and a SequenceNumber (8)
+    let mut inline_qos = ParameterList::new();
+    for parameter_id in [
+      ParameterId::PID_RELATED_SAMPLE_IDENTITY,
+      ParameterId::PID_RELATED_SAMPLE_IDENTITY_CUSTOM,
+    ] {
+      inline_qos.push(Parameter {
+        parameter_id,
+        value: identity.clone(),
+      });
+    }
+    let payload: Vec<u8> = (0..=255).cycle().take(2 * 256).collect();
+    let df = DataFrag {
+      reader_id: EntityId::new([0, 0x13, 0], EntityKind::READER_NO_KEY_USER_DEFINED),
+      writer_id: EntityId::new([0, 0x0c, 0], EntityKind::WRITER_NO_KEY_USER_DEFINED),
+      writer_sn: SequenceNumber::new(2),
+      fragment_starting_num: FragmentNumber::new(1),
+      fragments_in_submessage: 2,
+      fragment_size: 256,
+      data_size: 2317,
+      inline_qos: Some(inline_qos),
+      serialized_payload: Bytes::from(payload.clone()),
+    };
+    for (endianness, flags, pid_bytes) in [
+      (
+        Endianness::LittleEndian,
+        DATAFRAG_Flags::Endianness | DATAFRAG_Flags::InlineQos,
+        [0x83, 0x00, 24, 0x00],
+      ),
+      (
+        Endianness::BigEndian,
+        BitFlags::from_flag(DATAFRAG_Flags::InlineQos),
+        [0x00, 0x83, 0x00, 24],
+      ),
+    ] {
+      let mut body = Vec::new();
+      df.write_to_stream_with_ctx(endianness, &mut body).unwrap();
+      // The submessage header declares len_serialized(): it must be the real length.
+      assert_eq!(body.len(), df.len_serialized(), "{endianness:?}");
+      // octetsToInlineQos (28, counted from byte 4) points at the first parameter:
+      // PID_RELATED_SAMPLE_IDENTITY (0x0083), length 24. Unpatched, a stray 0x01
+      // (speedy's `Some` tag) stood here and Fast DDS read PID 0x8301, length 6144.
+      assert_eq!(&body[4 + 28..4 + 32], &pid_bytes, "{endianness:?}");
+      // Two parameters of 4 + 24 bytes and the sentinel, then the fragments.
+      assert_eq!(&body[4 + 28 + 2 * 28 + 4..], &payload[..], "{endianness:?}");
+      let read = DataFrag::deserialize(&Bytes::from(body), flags).unwrap();
+      assert_eq!(read, df, "{endianness:?}");
+    }
   }
 
   #[test]

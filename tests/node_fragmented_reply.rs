@@ -1,0 +1,139 @@
+//! `cstep node` over real DDS (localhost, a private domain): an `/cstep/evaluate_batch` reply
+//! too large for one datagram goes as DATA_FRAGs and reaches a ros2-client (RustDDS) client
+//! whole, twice in a row. Every fragment of a service reply carries the request's identity as
+//! inline QoS; until vendor/rustdds wrote it where the RTPS spec puts it
+//! (`vendor/rustdds/CSTEP_PATCH.md`, section 3) no reader, RustDDS or Fast DDS, could parse such
+//! a fragment and the reply never arrived. To a RustDDS peer that advertises loopback only the
+//! node's datagram budget is the loopback MTU (~64 kB), not the 1452 bytes an rclpy client
+//! gets, hence 512 states (a 74 kB reply, and a 770 kB request the client fragments too).
+//! `tests/python/test_bridge.py` checks a 16-state reply (2.5 kB) with an rclpy client.
+
+use std::process::{Child, Command, Stdio};
+use std::time::Duration;
+
+use cstep::ros::context::context_from_env;
+use cstep::ros::messages::{EvaluateBatchRequest, EvaluateBatchResponse, LaserScan, Odometry};
+use ros2_client::qos::{History, WhenFull};
+use ros2_client::{Name, NodeName, NodeOptions, QosProfile, ServiceMapping, ServiceTypeName};
+
+/// A private domain for this test process: 101–220, clear of the Python tests' 1–100, offset by
+/// the process id so that two runs on one machine are unlikely to share it.
+fn domain() -> String {
+    (101 + std::process::id() % 120).to_string()
+}
+
+/// How long discovery may take before the test gives up.
+const PATIENCE: Duration = Duration::from_secs(60);
+
+/// States in the large batch: a reply over the ~64 kB loopback budget.
+const BIG: usize = 512;
+
+/// How long a reply may take once the service answers.
+const REPLY_TIMEOUT: Duration = Duration::from_secs(10);
+
+/// How long to wait for the reply to a probe before sending another.
+const PROBE_TIMEOUT: Duration = Duration::from_secs(1);
+
+/// The node under test, killed when dropped.
+struct NodeProcess(Child);
+
+impl Drop for NodeProcess {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
+/// `k` copies of one valid state: the robot at the origin, walls 2 m away all round.
+fn batch(k: usize) -> EvaluateBatchRequest {
+    let increment = std::f32::consts::TAU / 180.0;
+    let scan = LaserScan {
+        angle_min: -std::f32::consts::PI,
+        angle_max: -std::f32::consts::PI + increment * 179.0,
+        angle_increment: increment,
+        range_min: 0.1,
+        range_max: 3.0,
+        ranges: vec![2.0; 180],
+        ..Default::default()
+    };
+    EvaluateBatchRequest {
+        odom: vec![Odometry::default(); k],
+        scan: vec![scan; k],
+        ..Default::default()
+    }
+}
+
+#[test]
+fn a_batch_reply_sent_as_fragments_arrives_whole() {
+    // This process joins the domain through the same reading of the environment as the node.
+    std::env::set_var("ROS_DOMAIN_ID", domain());
+    std::env::set_var("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST");
+    std::env::remove_var("ROS_LOCALHOST_ONLY");
+    std::env::remove_var("ROS_STATIC_PEERS");
+    let _node = NodeProcess(
+        Command::new(env!("CARGO_BIN_EXE_cstep"))
+            .args(["node", "--exit-with-parent"])
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .spawn()
+            .expect("cstep node starts"),
+    );
+
+    let context = context_from_env(true).unwrap();
+    let mut peer = context
+        .new_node(
+            NodeName::new("/", "fragmented_reply_peer").unwrap(),
+            NodeOptions::new().enable_rosout(false),
+        )
+        .unwrap();
+    let qos = QosProfile::default()
+        .reliability_reliable(WhenFull::Wait(Duration::from_millis(100)))
+        .history(History::KeepLast { depth: 10 });
+    let client = peer
+        .create_client::<EvaluateBatchRequest, EvaluateBatchResponse>(
+            ServiceMapping::Enhanced,
+            &Name::parse("/cstep/evaluate_batch").unwrap(),
+            &ServiceTypeName::new("cstep_msgs", "EvaluateBatch"),
+            qos.clone(),
+            qos,
+        )
+        .unwrap();
+    let executor = smol::LocalExecutor::new();
+    executor.spawn(peer.spinner().unwrap().spin()).detach();
+
+    let call = |k: usize, patience: Duration| {
+        let client = &client;
+        async move {
+            let reply = client.async_call_service(batch(k));
+            let timeout = async {
+                smol::Timer::after(patience).await;
+                None
+            };
+            smol::future::or(async { reply.await.ok() }, timeout).await
+        }
+    };
+    let exchange = async {
+        client.wait_for_service(&peer).await;
+        // Discovered is not yet matched both ways: probe with one state until a reply comes.
+        while call(1, PROBE_TIMEOUT).await.is_none() {}
+        let first = call(BIG, REPLY_TIMEOUT).await.expect("the big reply");
+        let second = call(BIG, REPLY_TIMEOUT).await.expect("a second big reply");
+        let after = call(1, REPLY_TIMEOUT)
+            .await
+            .expect("a small reply still arrives after");
+        Some((first, second, after))
+    };
+    let give_up = async {
+        smol::Timer::after(PATIENCE).await;
+        None
+    };
+    let (first, second, after) = smol::block_on(executor.run(smol::future::or(exchange, give_up)))
+        .expect("the service answers within the patience");
+
+    for reply in [&first, &second] {
+        assert_eq!((reply.empowerment.len(), reply.reward.len()), (BIG, BIG));
+        assert!(reply.empowerment.iter().all(|e| e.valid), "{reply:?}");
+    }
+    assert_eq!(first, second, "the same request gets the same answer");
+    assert_eq!(after.empowerment[0], first.empowerment[0]);
+}

@@ -20,7 +20,7 @@
 //! `cargo test` runs 20 000 inputs (well under a second). The long run (`make fuzz-cdr`):
 //!
 //! ```sh
-//! CDR_FUZZ_INPUTS=10000000 CDR_FUZZ_SEED=1 cargo test --release --test cdr_fuzz -- --nocapture
+//! CDR_FUZZ_INPUTS=10000000 CDR_FUZZ_SEED=1 cargo test --test cdr_fuzz -- --nocapture
 //! ```
 
 use std::panic::{catch_unwind, AssertUnwindSafe};

@@ -8,22 +8,14 @@
 //! gets, hence 512 states (a 74 kB reply, and a 770 kB request the client fragments too).
 //! `tests/python/test_bridge.py` checks a 16-state reply (2.5 kB) with an rclpy client.
 
-use std::process::{Child, Command, Stdio};
+#[path = "common/live.rs"]
+mod live;
+
 use std::time::Duration;
 
-use cstep::ros::context::context_from_env;
-use cstep::ros::messages::{EvaluateBatchRequest, EvaluateBatchResponse, LaserScan, Odometry};
-use ros2_client::qos::{History, WhenFull};
-use ros2_client::{Name, NodeName, NodeOptions, QosProfile, ServiceMapping, ServiceTypeName};
-
-/// A private domain for this test process: 101–220, clear of the Python tests' 1–100, offset by
-/// the process id so that two runs on one machine are unlikely to share it.
-fn domain() -> String {
-    (101 + std::process::id() % 120).to_string()
-}
-
-/// How long discovery may take before the test gives up.
-const PATIENCE: Duration = Duration::from_secs(60);
+use cstep::ros::messages::{EvaluateBatchRequest, EvaluateBatchResponse, Odometry};
+use live::{peer, reliable_qos, start_node, walls_scan, PATIENCE};
+use ros2_client::{Name, ServiceMapping, ServiceTypeName};
 
 /// States in the large batch: a reply over the ~64 kB loopback budget.
 const BIG: usize = 512;
@@ -34,28 +26,9 @@ const REPLY_TIMEOUT: Duration = Duration::from_secs(10);
 /// How long to wait for the reply to a probe before sending another.
 const PROBE_TIMEOUT: Duration = Duration::from_secs(1);
 
-/// The node under test, killed when dropped.
-struct NodeProcess(Child);
-
-impl Drop for NodeProcess {
-    fn drop(&mut self) {
-        let _ = self.0.kill();
-        let _ = self.0.wait();
-    }
-}
-
 /// `k` copies of one valid state: the robot at the origin, walls 2 m away all round.
 fn batch(k: usize) -> EvaluateBatchRequest {
-    let increment = std::f32::consts::TAU / 180.0;
-    let scan = LaserScan {
-        angle_min: -std::f32::consts::PI,
-        angle_max: -std::f32::consts::PI + increment * 179.0,
-        angle_increment: increment,
-        range_min: 0.1,
-        range_max: 3.0,
-        ranges: vec![2.0; 180],
-        ..Default::default()
-    };
+    let scan = walls_scan();
     EvaluateBatchRequest {
         odom: vec![Odometry::default(); k],
         scan: vec![scan; k],
@@ -65,30 +38,9 @@ fn batch(k: usize) -> EvaluateBatchRequest {
 
 #[test]
 fn a_batch_reply_sent_as_fragments_arrives_whole() {
-    // This process joins the domain through the same reading of the environment as the node.
-    std::env::set_var("ROS_DOMAIN_ID", domain());
-    std::env::set_var("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST");
-    std::env::remove_var("ROS_LOCALHOST_ONLY");
-    std::env::remove_var("ROS_STATIC_PEERS");
-    let _node = NodeProcess(
-        Command::new(env!("CARGO_BIN_EXE_cstep"))
-            .args(["node", "--exit-with-parent"])
-            .stdout(Stdio::null())
-            .stderr(Stdio::null())
-            .spawn()
-            .expect("cstep node starts"),
-    );
-
-    let context = context_from_env(true).unwrap();
-    let mut peer = context
-        .new_node(
-            NodeName::new("/", "fragmented_reply_peer").unwrap(),
-            NodeOptions::new().enable_rosout(false),
-        )
-        .unwrap();
-    let qos = QosProfile::default()
-        .reliability_reliable(WhenFull::Wait(Duration::from_millis(100)))
-        .history(History::KeepLast { depth: 10 });
+    let _node = start_node();
+    let mut peer = peer("fragmented_reply_peer");
+    let qos = reliable_qos();
     let client = peer
         .create_client::<EvaluateBatchRequest, EvaluateBatchResponse>(
             ServiceMapping::Enhanced,

@@ -2,27 +2,16 @@
 //! decodable CDR is dropped, counted in the diagnostics' `inputs_rejected` and named there, as
 //! an undecodable topic message is (issue 12, failure 9: the servers dropped it uncounted).
 
-use std::process::{Child, Command, Stdio};
+#[path = "common/live.rs"]
+mod live;
+
 use std::time::Duration;
 
-use cstep::ros::context::context_from_env;
 use cstep::ros::messages::{DiagnosticArray, LaserScan, Odometry};
 use futures::StreamExt;
-use ros2_client::qos::{History, WhenFull};
-use ros2_client::{
-    Message, MessageTypeName, Name, NodeName, NodeOptions, QosProfile, ServiceMapping,
-    ServiceTypeName,
-};
+use live::{peer, reliable_qos, start_node, walls_scan, PATIENCE};
+use ros2_client::{Message, MessageTypeName, Name, ServiceMapping, ServiceTypeName};
 use serde::{Deserialize, Serialize};
-
-/// A private domain for this test process: 101–220, clear of the Python tests' 1–100, offset by
-/// the process id so that two runs on one machine are unlikely to share it.
-fn domain() -> String {
-    (101 + std::process::id() % 120).to_string()
-}
-
-/// How long discovery and the diagnostics may take before the test gives up.
-const PATIENCE: Duration = Duration::from_secs(60);
 
 /// What the test sends as a `cstep_msgs/Evaluate` request: one byte, where the odometry's
 /// header should begin.
@@ -31,42 +20,11 @@ struct OneByte(u8);
 
 impl Message for OneByte {}
 
-/// The node under test, killed when dropped.
-struct NodeProcess(Child);
-
-impl Drop for NodeProcess {
-    fn drop(&mut self) {
-        let _ = self.0.kill();
-        let _ = self.0.wait();
-    }
-}
-
 #[test]
 fn an_undecodable_evaluate_request_is_counted_and_named_in_diagnostics() {
-    // This process joins the domain through the same reading of the environment as the node.
-    std::env::set_var("ROS_DOMAIN_ID", domain());
-    std::env::set_var("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST");
-    std::env::remove_var("ROS_LOCALHOST_ONLY");
-    std::env::remove_var("ROS_STATIC_PEERS");
-    let _node = NodeProcess(
-        Command::new(env!("CARGO_BIN_EXE_cstep"))
-            .args(["node", "--exit-with-parent"])
-            .stdout(Stdio::null())
-            .stderr(Stdio::null())
-            .spawn()
-            .expect("cstep node starts"),
-    );
-
-    let context = context_from_env(true).unwrap();
-    let mut peer = context
-        .new_node(
-            NodeName::new("/", "undecodable_peer").unwrap(),
-            NodeOptions::new().enable_rosout(false),
-        )
-        .unwrap();
-    let qos = QosProfile::default()
-        .reliability_reliable(WhenFull::Wait(Duration::from_millis(100)))
-        .history(History::KeepLast { depth: 10 });
+    let _node = start_node();
+    let mut peer = peer("undecodable_peer");
+    let qos = reliable_qos();
     let client = peer
         .create_client::<OneByte, OneByte>(
             ServiceMapping::Enhanced,
@@ -100,16 +58,7 @@ fn an_undecodable_evaluate_request_is_counted_and_named_in_diagnostics() {
     let scan = peer
         .create_publisher::<LaserScan>(&scan_topic, None)
         .unwrap();
-    let increment = std::f32::consts::TAU / 180.0;
-    let beams = LaserScan {
-        angle_min: -std::f32::consts::PI,
-        angle_max: -std::f32::consts::PI + increment * 179.0,
-        angle_increment: increment,
-        range_min: 0.1,
-        range_max: 3.0,
-        ranges: vec![2.0; 180],
-        ..Default::default()
-    };
+    let beams = walls_scan();
     let executor = smol::LocalExecutor::new();
     executor.spawn(peer.spinner().unwrap().spin()).detach();
     executor

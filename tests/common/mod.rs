@@ -1,5 +1,6 @@
 //! Helpers shared by the integration tests: estimators from parameter overrides, scans of
-//! simple scenes, and a FIFO to feed the CLI.
+//! simple scenes, and a FIFO to feed the CLI. (A live node to talk to over DDS is `live.rs`,
+//! included by the tests that need it: the examples share this module and have no binary.)
 #![allow(dead_code)]
 
 use cstep::config::Settings;

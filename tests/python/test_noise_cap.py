@@ -1,19 +1,14 @@
 """The gSDE noise cap: on a real SB3 PPO policy, and in a real (tiny) drone training run."""
 
-import os
 import re
-import subprocess
-import sys
-from pathlib import Path
 
 import gymnasium as gym
 import numpy as np
 import pytest
 import torch
 from cstep_bridge.noise_cap import NoiseCap, apply_cap, noise_std
+from module_cli import run
 from stable_baselines3 import PPO
-
-REPO = Path(__file__).resolve().parents[2]
 
 
 def policy_and_observations(use_expln: bool):
@@ -59,47 +54,14 @@ def test_the_cap_falls_linearly_with_progress_and_refuses_nonsense():
 
 def test_a_training_run_explores_under_the_cap(tmp_path):
     """log std 0.5 starts the noise far above 0.3; from the second rollout on it is capped."""
-    proc = subprocess.run(
-        [
-            sys.executable,
-            "-m",
-            "cstep_bridge.train",
-            "--env",
-            "drone",
-            "--agent",
-            "unempowered",
-            "--protocol",
-            "tuned",
-            "--n-envs",
-            "1",
-            "--vec-env",
-            "dummy",
-            "--timesteps",
-            "192",
-            "--net",
-            "32,32",
-            "--n-steps",
-            "64",
-            "--batch-size",
-            "32",
-            "--n-epochs",
-            "2",
-            "--hyperparams",
-            "policy_kwargs={log_std_init: 0.5}",
-            "validation=null",
-            "noise_cap={start: 0.3, end: 0.3}",
-            "--out",
-            str(tmp_path / "run"),
-            "--no-progress",
-        ],
-        capture_output=True,
-        text=True,
-        timeout=300,
-        check=False,
-        cwd=REPO,
-        env=dict(os.environ, PYTHONPATH=str(REPO / "py_bridge")),
+    proc = run(
+        "train",
+        *("--env", "drone", "--agent", "unempowered", "--protocol", "tuned", "--n-envs", "1"),
+        *("--vec-env", "dummy", "--timesteps", "192", "--net", "32,32", "--n-steps", "64"),
+        *("--batch-size", "32", "--n-epochs", "2", "--out", str(tmp_path / "run"), "--no-progress"),
+        *("--hyperparams", "policy_kwargs={log_std_init: 0.5}", "validation=null"),
+        "noise_cap={start: 0.3, end: 0.3}",
     )
-    assert proc.returncode == 0, proc.stdout + proc.stderr
     noise = [float(v) for v in re.findall(r"noise\s+([0-9.]+)", proc.stdout)]
     assert len(noise) == 3
     assert noise[0] > 1.0  # the first rollout, before any cap
@@ -107,28 +69,10 @@ def test_a_training_run_explores_under_the_cap(tmp_path):
 
 
 def test_a_cap_without_gsde_is_refused(tmp_path):
-    proc = subprocess.run(
-        [
-            sys.executable,
-            "-m",
-            "cstep_bridge.train",
-            "--env",
-            "maze",
-            "--agent",
-            "unempowered",
-            "--protocol",
-            "tuned",
-            "--hyperparams",
-            "noise_cap={start: 1.0, end: 0.5}",
-            "--out",
-            str(tmp_path / "run"),
-        ],
-        capture_output=True,
-        text=True,
-        timeout=120,
-        check=False,
-        cwd=REPO,
-        env=dict(os.environ, PYTHONPATH=str(REPO / "py_bridge")),
+    proc = run(
+        "train",
+        *("--env", "maze", "--agent", "unempowered", "--protocol", "tuned"),
+        *("--hyperparams", "noise_cap={start: 1.0, end: 0.5}", "--out", str(tmp_path / "run")),
+        ok=False,
     )
-    assert proc.returncode != 0
     assert "noise_cap needs use_sde" in proc.stderr

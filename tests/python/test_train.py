@@ -2,19 +2,16 @@
 the empowered agent a real `cstep node` over real DDS (on a private domain, shared by its envs)."""
 
 import json
-import os
 import shutil
-import subprocess
-import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 from cstep_bridge import training_log
 from cstep_bridge.evaluate import Agent, group_seeds
+from module_cli import run
 from stable_baselines3 import PPO
 
-REPO = Path(__file__).resolve().parents[2]
 TINY = [
     "--net",
     "32,32",
@@ -26,23 +23,6 @@ TINY = [
     "2",
     "--no-progress",
 ]
-
-
-def run(module: str, *args: str, ok: bool = True) -> subprocess.CompletedProcess:
-    """``python -m cstep_bridge.<module> args``; asserts it succeeded (or, ``ok=False``, failed)."""
-    proc = subprocess.run(
-        [sys.executable, "-m", f"cstep_bridge.{module}", *args],
-        capture_output=True,
-        text=True,
-        timeout=300,
-        env=dict(os.environ, PYTHONPATH=str(REPO / "py_bridge")),
-        cwd=REPO,
-        check=False,
-    )
-    assert (proc.returncode == 0) == ok, (
-        f"{module}: {proc.returncode}\n{proc.stdout}\n{proc.stderr}"
-    )
-    return proc
 
 
 @pytest.fixture(scope="module")

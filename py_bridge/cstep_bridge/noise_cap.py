@@ -3,10 +3,11 @@
 Why: the drone sweep (``docs/results/protocol.md``) found that PPO learns the goal only with
 temporally correlated gSDE noise, and that this noise stays large: gSDE's noise for a state is
 ``θ · z(s)``, with ``θ ~ N(0, σ²)`` per latent feature and ``z(s)`` the policy's latent features,
-whose size PPO does not control; in run d17 its std before the tanh squashing was a median 3.9 at
-500 k steps (it started near 3), against a mean of median size 3.8. Under that noise the policy
-learns bang-bang actions (87 % saturated) and keeps away from walls, so goals near a wall are not
-reached by its deterministic actions. Neither SB3 nor rl-zoo has a schedule for the noise (PPO's
+whose size PPO does not control. Flying run d17's best model on the 100 evaluation arenas
+(``docs/results/drone/failure_modes.py --model docs/results/drone/models/unempowered-d17``), its
+noise std before the tanh squashing is a median 3.5, its mean a median 3.6 in size; under that
+noise the policy learns bang-bang actions (80 % of components saturated) and keeps away from
+walls, so goals near a wall are not reached by its deterministic actions. Neither SB3 nor rl-zoo has a schedule for the noise (PPO's
 ``ent_coef`` is an incentive, not a bound; it did not stop the saturation, run d14), hence this.
 
 What it does: before each rollout, the noise std of each action component — the median over the
@@ -55,17 +56,21 @@ class NoiseCap:
         return self.start + (self.end - self.start) * min(max(progress, 0.0), 1.0)
 
 
-def noise_std(policy, observations: np.ndarray) -> np.ndarray:
-    """Per action component, the median over ``observations`` (as the policy sees them) of the
-    std of gSDE's exploration noise before squashing."""
+def state_noise(policy, observations: np.ndarray):
+    """SB3's own gSDE action distribution for each of ``observations`` (as the policy sees them):
+    a torch ``Normal`` whose ``loc`` is the mean before squashing and whose ``scale`` is the std of
+    the exploration noise, ``sqrt(Σ_j z_j(s)² σ_jk²)``, per action component."""
     import torch
 
     with torch.no_grad():
         obs = torch.as_tensor(observations, dtype=torch.float32)
-        latent, _ = policy.mlp_extractor(policy.extract_features(obs))
-        std = policy.action_dist.get_std(policy.log_std)
-        per_state = ((latent**2) @ (std**2)).sqrt()
-    return per_state.median(dim=0).values.numpy()
+        return policy.get_distribution(obs).distribution
+
+
+def noise_std(policy, observations: np.ndarray) -> np.ndarray:
+    """Per action component, the median over ``observations`` of the std of gSDE's exploration
+    noise before squashing."""
+    return state_noise(policy, observations).scale.median(dim=0).values.numpy()
 
 
 def _log_std_for(policy, std):
@@ -79,7 +84,8 @@ def _log_std_for(policy, std):
 
 def apply_cap(policy, observations: np.ndarray, cap: float) -> np.ndarray:
     """Scales down the gSDE std of each action component whose noise on ``observations`` exceeds
-    ``cap``; returns the noise std per component after the cap."""
+    ``cap``; returns the noise std per component after the cap (each state's noise in a component
+    scales with that component's σ column, so its median does too)."""
     import torch
 
     measured = noise_std(policy, observations)
@@ -90,7 +96,7 @@ def apply_cap(policy, observations: np.ndarray, cap: float) -> np.ndarray:
         std = policy.action_dist.get_std(policy.log_std)
         capped = std * torch.as_tensor(scale, dtype=std.dtype)
         policy.log_std.copy_(_log_std_for(policy, capped))
-    return noise_std(policy, observations)
+    return measured * scale
 
 
 def make_callback(cap: NoiseCap):

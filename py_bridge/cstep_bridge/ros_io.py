@@ -82,7 +82,7 @@ SERVICE = "/cstep/evaluate_batch"
 # 4.6-5.4 kB, which the node's RustDDS writer sends as DATA_FRAGs (every reply over ~1.3 kB, 9
 # states, is fragmented; until vendor/rustdds's fix of their inline QoS, CSTEP_PATCH.md section
 # 3, no fragmented reply reached rclpy and calls were capped at 4 states). The tuned protocols'
-# 8 envs go in one call: two calls of 4 cost ~1.5 ms more a vector step (measured 2026-12-02).
+# 8 envs go in one call.
 STATES_PER_CALL = 32
 
 

@@ -16,9 +16,9 @@ import itertools
 from pathlib import Path
 
 import numpy as np
-import torch
 from cstep_bridge.env import CStepDroneEnv
 from cstep_bridge.evaluate import configurations, reset_options
+from cstep_bridge.noise_cap import state_noise
 from cstep_bridge.normalization import observation_normalizer
 from stable_baselines3 import PPO
 
@@ -40,13 +40,8 @@ def noise_and_mean(model: PPO, observations: np.ndarray) -> tuple[np.ndarray, np
     policy = model.policy
     if not (policy.use_sde and policy.squash_output):
         return None
-    with torch.no_grad():
-        obs = torch.as_tensor(observations, dtype=torch.float32)
-        latent, _ = policy.mlp_extractor(policy.extract_features(obs))
-        mean = policy.action_net(latent)
-        std = policy.action_dist.get_std(policy.log_std)
-        noise = ((latent**2) @ (std**2)).sqrt()
-    return mean.abs().numpy(), noise.numpy()
+    dist = state_noise(policy, observations)
+    return dist.loc.abs().numpy(), dist.scale.numpy()
 
 
 def main() -> int:

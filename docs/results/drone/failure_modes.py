@@ -1,7 +1,7 @@
 """Where does a drone policy fail, and how does it act? Flies a model's deterministic policy on the
-evaluation arenas and reports success by how close the goal lies to a wall, where the failed
-episodes ended, and how saturated the actions are (for a tanh-squashed gSDE policy also the size
-of its pre-squash mean and exploration noise).
+evaluation arenas and reports success by how close the goal lies to a wall, how many collisions
+were with the block, where the failed episodes ended, and how saturated the actions are (for a
+tanh-squashed gSDE policy also the size of its pre-squash mean and exploration noise).
 
     PYTHONPATH=py_bridge .venv/bin/python docs/results/drone/failure_modes.py \\
         --model docs/results/drone/models/unempowered-d17 --episodes 100
@@ -20,6 +20,7 @@ from cstep_bridge.env import CStepDroneEnv
 from cstep_bridge.evaluate import configurations, reset_options
 from cstep_bridge.noise_cap import state_noise
 from cstep_bridge.normalization import observation_normalizer
+from cstep_bridge.world import rect_distance
 from stable_baselines3 import PPO
 
 WALL_BINS = (0.0, 0.3, 0.6, 10.0)
@@ -65,15 +66,17 @@ def main() -> int:
                 actions.append(action)
                 obs, _, terminated, truncated, info = env.step(action)
                 done = terminated or truncated
-            goal = env.sim.goal[:2]
+            goal, end = env.sim.goal[:2], np.asarray(info["position"])
+            nearer_block = rect_distance(*end, env.sim.arena.block) < wall_distance(env, end)
             rows.append(
                 (
                     wall_distance(env, goal),
                     info["success"],
                     info["collision"],
                     info["distance_to_goal"],
-                    *info["position"],
+                    *end,
                     *goal,
+                    nearer_block,
                 )
             )
     finally:
@@ -91,6 +94,12 @@ def main() -> int:
                 f"| {lo:g}–{hi:g} | {sel.sum()} | {success[sel].mean():.0%} | "
                 f"{np.median(final[sel]):.2f} |"
             )
+    if collision.any():
+        hit_block = int(a[collision == 1, 8].sum())
+        print(
+            f"\ncollisions: {int(collision.sum())}, {hit_block} of them ending nearer the block "
+            "than a wall"
+        )
     failed = (success == 0) & (collision == 0)
     if failed.any():
         ends = a[failed][:, 4:6]

@@ -10,12 +10,18 @@ moves up once the agent succeeds often enough at the current one. Only the train
 goal distance changes: the task, the reward function and the evaluation set stay as they are, and
 the last level is always 1 (the task's own goals, not drawn), so the rest of training runs on them.
 
+With ``full_task_share`` > 0, that share of the episodes below the last level keeps the task's own
+goal, so the full task (past the block, for the drone) is met from the start rather than after
+the levels have trained straight flights to near goals; only the level's own episodes count
+toward moving up.
+
 Configured by a protocol's ``curriculum`` entry (see :mod:`~cstep_bridge.protocol`)::
 
     curriculum:
       levels: [0.25, 0.5, 0.75, 1.0]   # fractions f, last = 1
       promote_at: 0.7                  # success rate over ...
       window: 60                       # ... the last this many episodes at the level
+      full_task_share: 0.25            # optional: episodes on the task's own goal (default 0)
 """
 
 from __future__ import annotations
@@ -40,13 +46,14 @@ class Curriculum:
     levels: tuple[float, ...]
     promote_at: float
     window: int
+    full_task_share: float = 0.0
 
     @classmethod
     def from_settings(cls, value: dict[str, Any] | None) -> Curriculum | None:
         """The curriculum of a run's ``curriculum`` setting; None when it has none."""
         if not value:
             return None
-        unknown = set(value) - {"levels", "promote_at", "window"}
+        unknown = set(value) - {"levels", "promote_at", "window", "full_task_share"}
         if unknown:
             raise ValueError(f"curriculum: unknown keys {sorted(unknown)}")
         levels = tuple(float(v) for v in value.get("levels", (0.25, 0.5, 0.75, 1.0)))
@@ -58,7 +65,12 @@ class Curriculum:
         window = int(value.get("window", 60))
         if not 0 < promote_at <= 1 or window <= 0:
             raise ValueError("curriculum: promote_at must be in (0, 1] and window > 0")
-        return cls(levels, promote_at, window)
+        full_task_share = float(value.get("full_task_share", 0.0))
+        if not 0 <= full_task_share < 1:
+            raise ValueError(
+                f"curriculum: full_task_share must be in [0, 1), not {full_task_share}"
+            )
+        return cls(levels, promote_at, window, full_task_share)
 
 
 def partway_goal(start: np.ndarray, goal: np.ndarray, fraction: float, clearance) -> np.ndarray:
@@ -79,10 +91,16 @@ def partway_goal(start: np.ndarray, goal: np.ndarray, fraction: float, clearance
     return goal.copy()
 
 
-def training_fraction(level: float, rng: np.random.Generator) -> float:
+def training_fraction(
+    level: float, rng: np.random.Generator, full_task_share: float = 0.0
+) -> float:
     """How far along an episode's goal lies at curriculum ``level``: U(0, level), or 1 (the
-    task's goal) at level 1."""
-    return 1.0 if level >= 1.0 else float(rng.uniform(0.0, level))
+    task's goal) at level 1 and, below it, with probability ``full_task_share``."""
+    if level >= 1.0:
+        return 1.0
+    if full_task_share > 0 and rng.uniform() < full_task_share:
+        return 1.0
+    return float(rng.uniform(0.0, level))
 
 
 def make_callback(curriculum: Curriculum, state: Path):
@@ -105,11 +123,15 @@ def make_callback(curriculum: Curriculum, state: Path):
             self.training_env.env_method(
                 "set_wrapper_attr", "goal_fraction", curriculum.levels[self.level]
             )
+            self.training_env.env_method(
+                "set_wrapper_attr", "full_task_share", curriculum.full_task_share
+            )
             self.outcomes = []
 
         def _on_step(self) -> bool:
             for info in self.locals["infos"]:
-                if "episode" in info:  # the Monitor marks an episode's last step
+                # The Monitor marks an episode's last step; the full-task share does not count.
+                if "episode" in info and info.get("goal_fraction", 0.0) < 1.0:
                     self.outcomes.append(bool(info["success"] and not info["collision"]))
             last = self.level == len(curriculum.levels) - 1
             recent = self.outcomes[-curriculum.window :]

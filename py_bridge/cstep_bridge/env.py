@@ -143,6 +143,23 @@ class EmpoweredRewardEnv(gym.Env):
     """The curriculum level: drawn goals lie up to this share of the way from the start (1 = the
     task's goals); set by the training curriculum (:mod:`~cstep_bridge.curriculum`), never by
     evaluation."""
+    full_task_share = 0.0
+    """The share of training episodes below the last curriculum level that keep the task's own
+    goal (the curriculum's ``full_task_share``); set with :attr:`goal_fraction`."""
+    episode_goal_fraction = 1.0
+    """How far along its start–goal line this episode's goal lies (1 = the task's goal); in every
+    step's ``info`` as ``goal_fraction``, so the curriculum can tell its level's episodes."""
+
+    def _draw_goal_fraction(self, fixed: bool) -> float:
+        """At reset: the fraction of the way to the task's goal that this episode's goal lies
+        (1 for a fixed configuration or at the last curriculum level), kept in
+        :attr:`episode_goal_fraction`."""
+        self.episode_goal_fraction = (
+            1.0
+            if fixed
+            else training_fraction(self.goal_fraction, self.np_random, self.full_task_share)
+        )
+        return self.episode_goal_fraction
 
     control_period = 1.0 / CONTROL_HZ
     """Seconds per env step (the 30 Hz control rate)."""
@@ -163,6 +180,7 @@ class EmpoweredRewardEnv(gym.Env):
             "min_obstacle_distance": self.sim.min_obstacle_distance(state),
             "distance_to_goal": self._distance(state),
             "position": (float(state.position[0]), float(state.position[1])),
+            "goal_fraction": self.episode_goal_fraction,
         }
 
     @property
@@ -289,8 +307,8 @@ class CStepDroneEnv(EmpoweredRewardEnv):
     def reset(self, *, seed: int | None = None, options: dict | None = None):
         super().reset(seed=seed)
         arena = self.fixed_arena or Arena.random(self.np_random)
-        if self.fixed_arena is None and self.goal_fraction < 1.0:
-            f = training_fraction(self.goal_fraction, self.np_random)
+        f = self._draw_goal_fraction(self.fixed_arena is not None)
+        if f < 1.0:
             goal = partway_goal(arena.start, arena.goal, f, arena.clearance)
             arena = dataclasses.replace(arena, goal=goal)
         if options and "arena" in options:

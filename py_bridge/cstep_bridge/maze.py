@@ -51,7 +51,7 @@ import numpy as np
 import pybullet as p
 from gymnasium import spaces
 
-from .curriculum import partway_goal, training_fraction
+from .curriculum import partway_goal
 from .env import EmpoweredRewardEnv
 from .sim import CONTROL_HZ, STEPS_PER_CONTROL, DroneState
 from .world import (
@@ -347,11 +347,12 @@ class CStepMazeEnv(EmpoweredRewardEnv):
         super().reset(seed=seed)
         configs = self.sim.layout.configurations()
         config = self.fixed_config or configs[self.np_random.integers(len(configs))]
-        if self.fixed_config is None and self.goal_fraction < 1.0:
+        fraction = self._draw_goal_fraction(self.fixed_config is not None)
+        if fraction < 1.0:
             goal = partway_goal(
                 np.array(config.start),
                 np.array(config.goal),
-                training_fraction(self.goal_fraction, self.np_random),
+                fraction,
                 self.sim.layout.clearance,
             )
             config = MazeConfig(config.start, (float(goal[0]), float(goal[1])))

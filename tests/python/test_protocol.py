@@ -144,6 +144,43 @@ def test_training_fractions_spread_up_to_the_level_and_the_last_level_is_the_tas
     assert curriculum.training_fraction(1.0, rng) == 1.0
 
 
+def test_a_full_task_share_keeps_that_share_of_goals_whole_and_zero_changes_nothing():
+    rng, plain = np.random.default_rng(1), np.random.default_rng(1)
+    draws = np.array([curriculum.training_fraction(0.4, rng, 0.25) for _ in range(4000)])
+    assert np.mean(draws == 1.0) == pytest.approx(0.25, abs=0.03)
+    assert draws[draws < 1.0].max() <= 0.4
+    # Without a share the draws are those of runs from before the share existed.
+    rng = np.random.default_rng(1)
+    same = [curriculum.training_fraction(0.4, rng, 0.0) for _ in range(50)]
+    assert same == [float(plain.uniform(0.0, 0.4)) for _ in range(50)]
+    for bad in (-0.1, 1.0, 2):
+        with pytest.raises(ValueError, match="full_task_share"):
+            curriculum.Curriculum.from_settings({"levels": [0.5, 1.0], "full_task_share": bad})
+
+
+def test_the_full_task_share_reaches_the_envs_and_marks_their_episodes(tmp_path):
+    """Below the last level, the task's own goals come back in the share set, and each step's
+    ``info`` says which kind of episode it belongs to (only the level's count for promotion)."""
+    venv = make_vec_env(lambda: make_env("drone", empowered=False), n_envs=1, seed=3)
+    plan = curriculum.Curriculum((0.3, 1.0), promote_at=1.0, window=5, full_task_share=0.5)
+    try:
+        model = PPO("MlpPolicy", venv, n_steps=16, batch_size=16, n_epochs=1, device="cpu")
+        model.learn(16, callback=curriculum.make_callback(plan, tmp_path / "c.json"))
+        env = venv.envs[0]
+        assert env.unwrapped.full_task_share == 0.5
+        kinds = []
+        for seed in range(20, 40):
+            env.reset(seed=seed)
+            arena = Arena.random(np.random.default_rng(seed))
+            _, _, _, _, info = env.step(np.zeros(2, dtype=np.float32))
+            whole = info["goal_fraction"] == 1.0
+            assert whole == bool(np.allclose(env.unwrapped.sim.arena.goal, arena.goal))
+            kinds.append(whole)
+        assert 3 <= sum(kinds) <= 17
+    finally:
+        venv.close()
+
+
 def test_the_curriculum_callback_moves_the_training_envs_goals(tmp_path):
     """The level reaches the env itself through its Monitor wrapper, and the goals it draws."""
     venv = make_vec_env(lambda: make_env("drone", empowered=False), n_envs=2, seed=3)

@@ -25,6 +25,9 @@ from stable_baselines3 import PPO
 
 WALL_BINS = (0.0, 0.3, 0.6, 10.0)
 """Edges (m) of the bins of the goal's distance to the nearest arena wall."""
+OFFSET_BINS = (0.0, 0.25, 0.5, 10.0)
+"""Edges (m) of the bins of the start's lateral offset |y − block_y| from the block's centre line:
+under 0.25 m the block's front face lies straight ahead of the start."""
 SATURATED = 0.95
 """An action component beyond this magnitude counts as saturated (the box is [−1, 1])."""
 
@@ -58,6 +61,7 @@ def main() -> int:
     try:
         for config in configurations("drone")[: args.episodes]:
             obs, info = env.reset(options=reset_options("drone", config))
+            offset = abs(env.sim.arena.start[1] - env.sim.arena.block_y)
             done = False
             while not done:
                 o = norm(obs)
@@ -77,6 +81,8 @@ def main() -> int:
                     *end,
                     *goal,
                     nearer_block,
+                    info["time"],
+                    offset,
                 )
             )
     finally:
@@ -94,11 +100,26 @@ def main() -> int:
                 f"| {lo:g}–{hi:g} | {sel.sum()} | {success[sel].mean():.0%} | "
                 f"{np.median(final[sel]):.2f} |"
             )
+    print("\n| start's offset from the block's centre line (m) | arenas | success | collisions |")
+    print("|---|---:|---:|---:|")
+    for lo, hi in itertools.pairwise(OFFSET_BINS):
+        sel = (a[:, 10] >= lo) & (a[:, 10] < hi)
+        if sel.any():
+            print(
+                f"| {lo:g}–{hi:g} | {sel.sum()} | {success[sel].mean():.0%} | "
+                f"{collision[sel].mean():.0%} |"
+            )
     if collision.any():
         hit_block = int(a[collision == 1, 8].sum())
         print(
             f"\ncollisions: {int(collision.sum())}, {hit_block} of them ending nearer the block "
             "than a wall"
+        )
+        after_goal = collision.astype(bool) & success.astype(bool)
+        print(
+            f"collisions after the goal was reached: {int(after_goal.sum())}; collision times "
+            f"(s) quantiles 10/50/90 %: "
+            + ", ".join(f"{v:.1f}" for v in np.quantile(a[collision == 1, 9], (0.1, 0.5, 0.9)))
         )
     failed = (success == 0) & (collision == 0)
     if failed.any():

@@ -1,0 +1,98 @@
+"""The campaign runner end to end on a tiny maze campaign: real trainings (the empowered one with a
+real `cstep node` over real DDS), real exports, and a second invocation that finds them done."""
+
+import json
+import shutil
+from pathlib import Path
+
+import pytest
+import yaml
+from cstep_bridge.campaign import Plan
+from module_cli import run
+
+TINY = [
+    *("--n-envs", "1", "--vec-env", "dummy", "--net", "32,32", "--n-steps", "64"),
+    *("--batch-size", "32", "--n-epochs", "1", "--checkpoint-every", "64"),
+    *("--hyperparams", "validation={every: 128, episodes: 1}", "curriculum=null"),
+]
+
+
+def write_plan(tmp_path: Path, **changes) -> Path:
+    """A two-run maze plan (unempowered and c = 1, seed 4) under ``tmp_path``."""
+    plan = {
+        "env": "maze",
+        "protocol": "tuned",
+        "timesteps": 128,
+        "agents": ["unempowered", "c1"],
+        "seeds": [4],
+        "runs": "runs",
+        "models": "models",
+        "train_args": TINY,
+        **changes,
+    }
+    path = tmp_path / "plan.yml"
+    path.write_text(yaml.safe_dump(plan))
+    return path
+
+
+def test_a_campaign_trains_exports_and_then_finds_every_run_done(tmp_path):
+    plan = write_plan(tmp_path)
+    first = run("campaign", str(plan), "--lanes", "2", "--root", str(tmp_path))
+    assert "campaign: 2 runs, 0 failed" in first.stdout
+    for name, agent, c in (("unempowered-s4", "unempowered", None), ("c1-s4", "empowered", 1.0)):
+        settings = json.loads((tmp_path / "models" / name / "run.json").read_text())
+        assert settings["agent"] == agent and settings["seed"] == 4 and settings["env"] == "maze"
+        if c is not None:
+            assert settings["c"] == c
+        assert settings["exported_from"]["model"] == "best_model.zip"
+        record = json.loads((tmp_path / "runs" / name / "campaign.json").read_text())
+        assert [s["exit"] for s in record["stretches"]] == [0] and record["hours"] > 0
+    again = run("campaign", str(plan), "--root", str(tmp_path))
+    assert again.stdout.count(": done (exported to") == 2
+    record = json.loads((tmp_path / "runs" / "c1-s4" / "campaign.json").read_text())
+    assert len(record["stretches"]) == 1  # nothing started again
+
+
+def test_a_stopped_run_is_resumed_and_one_without_a_checkpoint_starts_again(tmp_path):
+    plan = write_plan(tmp_path, agents=["unempowered"], timesteps=192)
+    run("campaign", str(plan), "--root", str(tmp_path))
+    directory = tmp_path / "runs" / "unempowered-s4"
+    shutil.rmtree(tmp_path / "models")  # as if stopped before its export: resumed, at its end
+    more = write_plan(tmp_path, agents=["unempowered"], timesteps=256)
+    again = run("campaign", str(more), "--root", str(tmp_path))
+    assert "--resume" in again.stdout
+    assert "at step 192" in (directory / "train.log").read_text()
+    # A run that never reached a checkpoint is set aside, not failed on.
+    shutil.rmtree(tmp_path / "models")
+    shutil.rmtree(directory / "checkpoints")
+    (directory / "model.zip").unlink()
+    last = run("campaign", str(more), "--root", str(tmp_path))
+    assert "no checkpoint to resume from" in last.stdout
+    assert list(tmp_path.glob("runs/unempowered-s4.abandoned-*"))
+    assert (tmp_path / "models" / "unempowered-s4" / "model.zip").exists()
+
+
+@pytest.mark.parametrize(
+    ("changes", "message"),
+    [
+        ({"agents": ["c-1"]}, "neither 'unempowered' nor c<value>"),
+        ({"agents": ["empowered"]}, "neither 'unempowered' nor c<value>"),
+        ({"seed": 3}, "unknown keys"),
+    ],
+)
+def test_a_malformed_plan_is_refused_naming_what_is_wrong(tmp_path, changes, message):
+    with pytest.raises(ValueError, match=message):
+        Plan.load(write_plan(tmp_path, **changes), tmp_path)
+    proc = run("campaign", str(write_plan(tmp_path, **changes)), ok=False)
+    assert message.split("'")[0] in proc.stderr
+
+
+def test_the_schedule_is_seed_major():
+    plan = Plan("drone", "tuned", 10, ["unempowered", "c1"], [11, 12], Path("r"), Path("m"))
+    assert [r.name for r in plan.schedule()] == [
+        "unempowered-s11",
+        "c1-s11",
+        "unempowered-s12",
+        "c1-s12",
+    ]
+    assert plan.schedule()[1].agent_args() == ["--agent", "empowered", "--c", "1"]

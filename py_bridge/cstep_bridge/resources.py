@@ -11,7 +11,8 @@ The node's files are not part of this package, so they are looked for in order, 
   checkout, or an install's ``share/cstep``); the ament index (``share/cstep``); the checkout.
 
 "The checkout" is the repository this package sits in (``py_bridge/cstep_bridge`` two levels
-below it), as with ``pip install -e`` or ``PYTHONPATH=py_bridge``. A place named explicitly (an
+below its ``Cargo.toml``), as with ``pip install -e`` or ``PYTHONPATH=py_bridge``; an installed
+copy has none. A place named explicitly (an
 argument or a variable) must hold the file: it is an error, not a reason to look further. When
 nothing is found, :class:`ResourceNotFound` names every place tried.
 """
@@ -25,8 +26,9 @@ from pathlib import Path
 PACKAGE = Path(__file__).resolve().parent
 """This package's directory: its own data (``data/``, ``hyperparams/``) lies here."""
 
-CHECKOUT = PACKAGE.parents[1]
-"""The repository this package sits in, when it runs from a checkout (the last place looked)."""
+CHECKOUT = PACKAGE.parents[1] if (PACKAGE.parents[1] / "Cargo.toml").is_file() else None
+"""The repository this package sits in when it runs from a checkout (the last place looked),
+else None."""
 
 CONFIG = "config/cstep.yaml"
 """The node's default configuration, relative to a share directory."""
@@ -82,12 +84,14 @@ def cstep_binary(explicit: Path | str | None = None) -> Path:
     if os.environ.get(BINARY_VAR):
         return _first(what, [(f"${BINARY_VAR}", Path(os.environ[BINARY_VAR]))], hint)
     on_path = shutil.which("cstep")
-    target = Path(os.environ.get("CARGO_TARGET_DIR", CHECKOUT / "target"))
+    target = os.environ.get("CARGO_TARGET_DIR") or (CHECKOUT and CHECKOUT / "target")
     places = [
         (f"${BINARY_VAR} (unset)", None),
         _ament_place("lib", AMENT_PACKAGE, "cstep"),
         ("cstep on $PATH (none)", Path(on_path) if on_path else None),
-        ("the checkout's release build", target / "release" / "cstep"),
+        ("the checkout's release build", Path(target) / "release" / "cstep")
+        if target
+        else ("the checkout's release build: cstep_bridge is not in a checkout", None),
     ]
     return _first(what, places, hint)
 
@@ -101,7 +105,9 @@ def share_file(relative: str) -> Path:
     places = [
         (f"${ROOT_VAR} (unset)", None),
         _ament_place("share", AMENT_PACKAGE, relative),
-        ("the checkout", CHECKOUT / relative),
+        ("the checkout", CHECKOUT / relative)
+        if CHECKOUT
+        else ("the checkout: cstep_bridge is not in one", None),
     ]
     return _first(relative, places, hint)
 

@@ -189,3 +189,49 @@ def test_cstep_root_without_the_file_names_where_it_looked(nothing_to_find, monk
         f"  - $CSTEP_ROOT: {root / 'config/cstep.yaml'} (missing)\n"
         "Set CSTEP_ROOT to a directory holding config/cstep.yaml (a checkout or share/cstep)."
     )
+
+
+def test_a_copy_outside_the_checkout_finds_the_node_files_only_where_told(tmp_path):
+    """An installed copy (here the package copied out of the checkout) does not guess: the
+    error says it is in no checkout, and ``$CSTEP_ROOT`` is enough to build an env."""
+    shutil.copytree(
+        resources.PACKAGE,
+        tmp_path / "site/cstep_bridge",
+        ignore=shutil.ignore_patterns("__pycache__"),
+    )
+    env = {
+        name: value
+        for name, value in os.environ.items()
+        if name not in (resources.ROOT_VAR, "AMENT_PREFIX_PATH")
+    }
+    env["PYTHONPATH"] = str(tmp_path / "site")
+    script = (
+        "import cstep_bridge, gymnasium\n"
+        "from cstep_bridge import resources\n"
+        "print('module', cstep_bridge.__file__)\n"
+        "try:\n"
+        "    resources.drone_urdf()\n"
+        "except resources.ResourceNotFound as error:\n"
+        "    print('error', str(error).splitlines()[3])\n"
+        "import os\n"
+        f"os.environ[{resources.ROOT_VAR!r}] = {str(resources.CHECKOUT)!r}\n"
+        "env = gymnasium.make('cstep/Drone-v0', empowered=False)\n"
+        "env.reset(seed=0)\n"
+        "print('urdf', env.unwrapped.sim.urdf)\n"
+        "env.close()\n"
+    )
+    run = subprocess.run(
+        [sys.executable, "-c", script],
+        cwd=tmp_path,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=120,
+        check=False,
+    )
+    assert run.returncode == 0, run.stderr
+    # Our lines by their first word: PyBullet prints its banner to the same stdout.
+    printed = dict(line.split(" ", 1) for line in run.stdout.splitlines() if " " in line)
+    assert printed["module"] == str(tmp_path / "site/cstep_bridge/__init__.py")
+    assert printed["error"] == "  - the checkout: cstep_bridge is not in one"
+    assert printed["urdf"] == str(resources.CHECKOUT / resources.DRONE_URDF)

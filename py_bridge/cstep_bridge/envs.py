@@ -21,10 +21,12 @@ from gymnasium.envs.registration import load_env_creator
 
 @dataclass(frozen=True)
 class EnvEntry:
-    """One environment: its Gymnasium id and its class as ``"module:Class"``."""
+    """One environment: its Gymnasium id and its class."""
 
     gym_id: str
+    """Its Gymnasium id, ``cstep/<Name>-v<version>`` (a contract: users' scripts name it)."""
     entry_point: str
+    """Its class as ``"module:Class"``, imported only when an env is built."""
 
 
 ENVS = {

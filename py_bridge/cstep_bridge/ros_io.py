@@ -60,11 +60,10 @@ from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy, qos_profi
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import LaserScan
 
+from .resources import config_file, cstep_binary
 from .sim import DroneState
 from .world import LIDAR_ANGLE_INCREMENT, LIDAR_ANGLE_MIN, LIDAR_RANGE, LIDAR_RANGE_MIN
 
-REPO = Path(__file__).resolve().parents[2]
-DEFAULT_CONFIG = REPO / "config" / "cstep.yaml"
 RELIABLE = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
 LATCHED = QoSProfile(
     depth=1, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL
@@ -88,14 +87,6 @@ STATES_PER_CALL = 32
 
 class RewardTimeout(RuntimeError):
     """The node did not answer in time."""
-
-
-def cstep_binary() -> Path:
-    """The `cstep` executable: $CSTEP_BIN, else the release build ($CARGO_TARGET_DIR or target/)."""
-    if "CSTEP_BIN" in os.environ:
-        return Path(os.environ["CSTEP_BIN"])
-    target = Path(os.environ.get("CARGO_TARGET_DIR", REPO / "target"))
-    return target / "release" / "cstep"
 
 
 _DOMAIN_COUNTER = itertools.count()
@@ -161,16 +152,17 @@ class CStepNode:
         self,
         domain_id: int,
         safety_coefficient: float = 1.0,
-        config: Path | str = DEFAULT_CONFIG,
+        config: Path | str | None = None,
         binary: Path | str | None = None,
         extra_params: dict[str, str] | None = None,
     ) -> None:
-        binary = Path(binary) if binary else cstep_binary()
-        if not binary.exists():
-            raise FileNotFoundError(
-                f"cstep binary not found at {binary}: build it (cargo build --release) "
-                "or set CSTEP_BIN"
-            )
+        """Starts the node with ``safety_coefficient`` and ``extra_params`` (name → value) set
+        on its command line. ``config`` and ``binary``: None finds them
+        (:func:`~cstep_bridge.resources.config_file`,
+        :func:`~cstep_bridge.resources.cstep_binary`); a missing one raises
+        :class:`~cstep_bridge.resources.ResourceNotFound` naming where it looked."""
+        binary = cstep_binary(binary)
+        config = config or config_file()
         params = {"safety_coefficient": repr(float(safety_coefficient)), **(extra_params or {})}
         # --exit-with-parent: a crashed or killed trainer leaves no node behind.
         args = [str(binary), "node", "--exit-with-parent", "--config", str(config), "--ros-args"]

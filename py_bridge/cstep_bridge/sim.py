@@ -31,15 +31,13 @@ from pathlib import Path
 import numpy as np
 import pybullet as p
 
+from .resources import drone_urdf
 from .world import (
     LIDAR_BEAMS,  # noqa: F401 (re-exported: the drone carries the shared LiDAR)
     PHYSICS_HZ,
     PhysicsWorld,
     rect_distance,
 )
-
-REPO = Path(__file__).resolve().parents[2]
-DEFAULT_URDF = REPO / "urdf" / "cf2x.urdf"
 
 G = 9.8
 CONTROL_HZ = 30
@@ -68,7 +66,10 @@ class DroneParams:
         return math.sqrt(self.mass * G / (4 * self.kf))
 
     @classmethod
-    def from_urdf(cls, path: Path | str = DEFAULT_URDF) -> DroneParams:
+    def from_urdf(cls, path: Path | str | None = None) -> DroneParams:
+        """The parameters in the URDF at ``path`` (None: the Crazyflie's,
+        :func:`~cstep_bridge.resources.drone_urdf`)."""
+        path = path or drone_urdf()
         root = ET.parse(path).getroot()
         props = root.find("properties")
         if props is None:
@@ -243,9 +244,12 @@ class DroneSim(PhysicsWorld):
         self,
         arena: Arena | None = None,
         gui: bool = False,
-        urdf: Path | str = DEFAULT_URDF,
+        urdf: Path | str | None = None,
     ) -> None:
+        """Builds ``arena`` (None: the default one) with the drone from ``urdf`` (None: the
+        Crazyflie's, :func:`~cstep_bridge.resources.drone_urdf`), headless unless ``gui``."""
         super().__init__(gui)
+        urdf = urdf or drone_urdf()
         self.params = DroneParams.from_urdf(urdf)
         self.urdf = str(urdf)
         self.controller = PIDController(self.params)

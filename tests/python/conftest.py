@@ -22,7 +22,8 @@ from rclpy.executors import SingleThreadedExecutor
 
 HERE = Path(__file__).resolve().parent
 REPO = HERE.parent.parent
-# py_bridge/ (the cstep_bridge package) straight from the checkout, without installing it.
+# py_bridge/ (the cstep_bridge package) straight from this checkout, whatever checkout the venv's
+# editable install points at (worktrees may share one venv); test_package.py checks the install.
 sys.path.insert(0, str(REPO / "py_bridge"))
 
 # Domains 1..100 (0 is everyone's default; Fast DDS ports stay clear of the ephemeral range

@@ -3,9 +3,8 @@
 import os
 import subprocess
 import sys
-from pathlib import Path
 
-REPO = Path(__file__).resolve().parents[2]
+from conftest import REPO
 
 
 def run(module: str, *args: str, ok: bool = True) -> subprocess.CompletedProcess:

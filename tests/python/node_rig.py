@@ -2,7 +2,8 @@
 
 ``conftest.py`` loads this module as a plugin, so its fixtures (``cstep_node``, ``rig``) are
 available to every test; its helpers (``Rig``, ``corridor_scan``, ``odometry``,
-``message_to_ordereddict``, ``cstep_binary``) are imported from it.
+``message_to_ordereddict``, and ``cstep_binary`` from :mod:`cstep_bridge.resources`) are imported
+from it.
 """
 
 import json
@@ -15,6 +16,7 @@ from pathlib import Path
 
 import pytest
 from conftest import REPO, wait_until
+from cstep_bridge.resources import config_file, cstep_binary
 from cstep_msgs.msg import EmpoweredReward, Empowerment
 from diagnostic_msgs.msg import DiagnosticArray
 from nav_msgs.msg import Odometry
@@ -22,7 +24,7 @@ from rclpy.node import Node
 from rclpy.qos import QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
 from sensor_msgs.msg import LaserScan
 
-CONFIG = REPO / "config" / "cstep.yaml"
+CONFIG = config_file()
 RELIABLE = QoSProfile(depth=50, reliability=ReliabilityPolicy.RELIABLE)
 
 
@@ -38,14 +40,6 @@ def message_to_ordereddict(message) -> dict:
         name: message_to_ordereddict(getattr(message, name))
         for name in message.get_fields_and_field_types()
     }
-
-
-def cstep_binary() -> Path:
-    """The release binary `make test` builds (CSTEP_BIN overrides)."""
-    if "CSTEP_BIN" in os.environ:
-        return Path(os.environ["CSTEP_BIN"])
-    target = Path(os.environ.get("CARGO_TARGET_DIR", REPO / "target"))
-    return target / "release" / "cstep"
 
 
 @pytest.fixture

@@ -2,10 +2,10 @@
 
 import math
 import re
-from pathlib import Path
 
 import pytest
 from builtin_interfaces.msg import Time
+from conftest import REPO
 from cstep_msgs.msg import EmpoweredReward, Empowerment
 from cstep_msgs.srv import Evaluate, EvaluateBatch
 from geometry_msgs.msg import Point
@@ -14,7 +14,7 @@ from rclpy.utilities import get_rmw_implementation_identifier
 from sensor_msgs.msg import LaserScan
 from std_msgs.msg import Header
 
-MSG_DIR = Path(__file__).resolve().parents[2] / "msg"
+MSG_DIR = REPO / "msg"
 
 # The contract: field names, types and order (src/ros/messages.rs mirrors them in this order).
 EMPOWERMENT_FIELDS = [

@@ -18,7 +18,11 @@ The plan (YAML)::
 Runs start in seed-major order (every agent's first seed before any second seed), so a campaign
 stopped half-way leaves a balanced comparison. A run with a ``run.json`` is continued with
 ``--resume``; one whose export exists is done and skipped; one that stopped before its first
-checkpoint is moved aside (``<name>.abandoned-<time>``) and started again. Each run's directory gets
+checkpoint is moved aside (``<name>.abandoned-<time>``) and started again. The trainers run in
+``--root`` (default: the current directory) with the plan's paths relative to it, so the run
+records and exports name them as a checkout does. One campaign per runs directory at a time (a
+lock file there); stopping it (Ctrl-C, SIGTERM) stops its trainers, which resume from their last
+checkpoint next time. Each run's directory gets
 ``train.log`` (appended) and ``campaign.json``: the wall-clock stretches it ran, for the report's
 hours. The run directories are the trainer's own (:mod:`~cstep_bridge.train`), the exports
 :mod:`~cstep_bridge.export`'s.
@@ -27,6 +31,7 @@ hours. The run directories are the trainer's own (:mod:`~cstep_bridge.train`), t
 from __future__ import annotations
 
 import argparse
+import fcntl
 import json
 import os
 import signal
@@ -48,8 +53,8 @@ class Run:
 
     agent: str
     seed: int
-    directory: Path
-    export: Path
+    directory: Path  # relative to the campaign's root
+    export: Path  # relative to the campaign's root
 
     @property
     def name(self) -> str:
@@ -72,15 +77,21 @@ class Plan:
     timesteps: int
     agents: list[str]
     seeds: list[int]
-    runs: Path
-    models: Path
+    runs: Path  # relative to root
+    models: Path  # relative to root
     train_args: list[str] = field(default_factory=list)
+    root: Path = Path(".")
+    """Where the trainers run and the plan's paths start."""
 
     @classmethod
     def load(cls, path: Path, root: Path) -> Plan:
-        """The plan in the YAML file ``path``; its directories relative to ``root``. Raises
+        """The plan in the YAML file ``path``, its directories relative to ``root``, checked as
+        far as it can be before training: its agents, seeds and the trainer's arguments, and
+        that the protocol validates (the export takes the best-validation model). Raises
         ValueError naming what is missing or malformed."""
         data = yaml.safe_load(path.read_text()) or {}
+        if not isinstance(data, dict):
+            data = {"": data}  # reported below as unknown, with every required key missing
         required = ("env", "protocol", "timesteps", "agents", "seeds", "runs", "models")
         missing = [k for k in required if k not in data]
         if missing:
@@ -88,19 +99,46 @@ class Plan:
         unknown = set(data) - set(required) - {"train_args"}
         if unknown:
             raise ValueError(f"{path}: unknown keys {sorted(unknown)}")
+        for key in ("agents", "seeds"):
+            values = data[key]
+            if not isinstance(values, list) or not values:
+                raise ValueError(f"{path}: {key} must be a non-empty list, not {values!r}")
+            if len(set(map(str, values))) != len(values):
+                raise ValueError(f"{path}: {key} lists a value twice: {values}")
         for agent in data["agents"]:
-            if agent != "unempowered" and not _is_coefficient(agent):
+            if agent != "unempowered" and not _is_coefficient(str(agent)):
                 raise ValueError(f"{path}: agent {agent!r} is neither 'unempowered' nor c<value>")
-        return cls(
+        plan = cls(
             env=str(data["env"]),
             protocol=str(data["protocol"]),
             timesteps=int(data["timesteps"]),
             agents=[str(a) for a in data["agents"]],
             seeds=[int(s) for s in data["seeds"]],
-            runs=root / data["runs"],
-            models=root / data["models"],
+            runs=Path(data["runs"]),
+            models=Path(data["models"]),
             train_args=[str(a) for a in data.get("train_args", [])],
+            root=root.resolve(),
         )
+        plan.check_training_settings(path)
+        return plan
+
+    def check_training_settings(self, path: Path) -> None:
+        """Raises ValueError unless the trainer accepts the plan's arguments and its runs
+        validate at least once (else no best-validation model to export)."""
+        from . import train
+
+        run = self.schedule()[0]
+        try:
+            args = train.parse_args(self.train_command(run, resume=False)[3:])
+            settings = train.run_settings(args)
+        except (SystemExit, ValueError) as err:
+            raise ValueError(f"{path}: the trainer refuses the plan's arguments ({err})") from err
+        validation = settings.get("validation")
+        if not validation or validation["every"] > self.timesteps:
+            raise ValueError(
+                f"{path}: the runs never validate (validation {validation}, {self.timesteps} "
+                "steps), so there is no best-validation model to export"
+            )
 
     def schedule(self) -> list[Run]:
         """Every run, seed-major."""
@@ -110,14 +148,15 @@ class Plan:
             for agent in self.agents
         ]
 
-    def train_command(self, run: Run) -> list[str]:
-        """The ``cstep_bridge.train`` command that starts or resumes ``run``."""
+    def train_command(self, run: Run, resume: bool | None = None) -> list[str]:
+        """The ``cstep_bridge.train`` command that starts or (``resume``; by default when the
+        run has started) resumes ``run``."""
+        if resume is None:
+            resume = (self.root / run.directory / "run.json").exists()
         cmd = [sys.executable, "-m", "cstep_bridge.train", "--env", self.env]
         cmd += ["--protocol", self.protocol, *run.agent_args(), "--seed", str(run.seed)]
         cmd += ["--timesteps", str(self.timesteps), "--out", str(run.directory), "--no-progress"]
-        if (run.directory / "run.json").exists():
-            cmd.append("--resume")
-        return cmd + self.train_args
+        return cmd + (["--resume"] if resume else []) + self.train_args
 
     def export_command(self, run: Run) -> list[str]:
         """The ``cstep_bridge.export`` command that exports ``run``'s best-validation model."""
@@ -130,27 +169,28 @@ class Plan:
 
 
 def _is_coefficient(agent: str) -> bool:
-    """Whether ``agent`` reads ``c<positive number>``."""
+    """Whether ``agent`` reads ``c<finite positive number>``."""
     try:
-        return agent.startswith("c") and float(agent[1:]) > 0
+        return agent.startswith("c") and 0 < float(agent[1:]) < float("inf")
     except ValueError:
         return False
 
 
-def _set_aside_if_unresumable(run: Run) -> None:
-    """Moves ``run``'s directory aside when it holds a run that has nothing to resume from (it
+def _set_aside_if_unresumable(directory: Path, name: str) -> None:
+    """Moves a run ``directory`` aside when it holds a run that has nothing to resume from (it
     stopped before its first checkpoint), so that it starts again rather than fail."""
     from .train import latest_checkpoint
 
-    if (run.directory / "run.json").exists() and latest_checkpoint(run.directory) is None:
-        aside = run.directory.with_name(f"{run.name}.abandoned-{time.strftime('%Y%m%d-%H%M%S')}")
-        run.directory.rename(aside)
-        print(f"{run.name}: no checkpoint to resume from; moved to {aside}, starting again")
+    if (directory / "run.json").exists() and latest_checkpoint(directory) is None:
+        aside = directory.with_name(f"{name}.abandoned-{time.strftime('%Y%m%d-%H%M%S')}")
+        directory.rename(aside)
+        print(f"{name}: no checkpoint to resume from; moved to {aside}, starting again")
 
 
-def _record_stretch(run: Run, started: float, exit_code: int) -> None:
-    """Appends one wall-clock stretch of ``run`` to its ``campaign.json``."""
-    path = run.directory / "campaign.json"
+def _record_stretch(directory: Path, started: float, exit_code: int | None) -> None:
+    """Appends one wall-clock stretch of the run in ``directory`` to its ``campaign.json``
+    (written whole, then renamed: a stop mid-write leaves the previous record)."""
+    path = directory / "campaign.json"
     record = json.loads(path.read_text()) if path.exists() else {"stretches": []}
     record["stretches"].append(
         {
@@ -160,68 +200,70 @@ def _record_stretch(run: Run, started: float, exit_code: int) -> None:
         }
     )
     record["hours"] = round(sum(s["seconds"] for s in record["stretches"]) / 3600, 3)
-    path.write_text(json.dumps(record, indent=2) + "\n")
+    partial = path.with_suffix(".json.partial")
+    partial.write_text(json.dumps(record, indent=2) + "\n")
+    os.replace(partial, path)
 
 
-def run_campaign(plan: Plan, lanes: int, cwd: Path, env: dict[str, str]) -> int:
+def _stop_on_sigterm(_signum, _frame) -> None:
+    """SIGTERM stops a campaign as Ctrl-C does (its trainers are stopped in turn)."""
+    raise KeyboardInterrupt
+
+
+def run_campaign(plan: Plan, lanes: int, env: dict[str, str]) -> int:
     """Trains every run of ``plan`` not yet exported, ``lanes`` at a time, exporting each as it
-    ends; returns the number of runs that failed (their logs say why)."""
-    pending = [r for r in plan.schedule() if not (r.export / "model.zip").exists()]
+    ends; returns the number of runs that failed (their ``train.log`` says why)."""
+    root = plan.root
+    pending = []
     for run in plan.schedule():
-        if run not in pending:
+        if (root / run.export / "model.zip").exists():
             print(f"{run.name}: done (exported to {run.export})", flush=True)
+        else:
+            pending.append(run)
     active: dict[subprocess.Popen, tuple[Run, float]] = {}
     failed = 0
-
-    def stop(signum, _frame):
-        for proc in active:
-            proc.terminate()
-        raise SystemExit(128 + signum)
-
-    signal.signal(signal.SIGTERM, stop)
+    previous = signal.signal(signal.SIGTERM, _stop_on_sigterm)
     try:
         while pending or active:
             while pending and len(active) < lanes:
                 run = pending.pop(0)
-                _set_aside_if_unresumable(run)
-                run.directory.mkdir(parents=True, exist_ok=True)
+                directory = root / run.directory
+                _set_aside_if_unresumable(directory, run.name)
+                directory.mkdir(parents=True, exist_ok=True)
                 cmd = plan.train_command(run)
                 print(f"{run.name}: {' '.join(cmd[1:])}", flush=True)
-                with open(run.directory / "train.log", "a") as log:
+                with open(directory / "train.log", "a") as log:
                     proc = subprocess.Popen(
-                        cmd, stdout=log, stderr=subprocess.STDOUT, cwd=cwd, env=env
+                        cmd, stdout=log, stderr=subprocess.STDOUT, cwd=root, env=env
                     )
                 active[proc] = (run, time.time())
             time.sleep(POLL_SECONDS)
             for proc in [p for p in active if p.poll() is not None]:
                 run, started = active.pop(proc)
-                _record_stretch(run, started, proc.returncode)
-                if proc.returncode != 0:
+                directory = root / run.directory
+                _record_stretch(directory, started, proc.returncode)
+                if proc.returncode != 0 or not _export(plan, run, env):
                     failed += 1
-                    print(
-                        f"{run.name}: training failed ({proc.returncode}); see "
-                        f"{run.directory / 'train.log'}",
-                        flush=True,
-                    )
-                    continue
-                result = subprocess.run(
-                    plan.export_command(run),
-                    cwd=cwd,
-                    env=env,
-                    capture_output=True,
-                    text=True,
-                    check=False,
-                )
-                if result.returncode != 0:
-                    failed += 1
-                    print(f"{run.name}: export failed: {result.stderr.strip()}", flush=True)
+                    print(f"{run.name}: failed; see {run.directory / 'train.log'}", flush=True)
                 else:
                     print(f"{run.name}: done, exported to {run.export}", flush=True)
-    except KeyboardInterrupt:
-        for proc in active:
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+        for proc, (run, started) in active.items():
             proc.terminate()
-        raise
+            proc.wait()
+            _record_stretch(root / run.directory, started, proc.returncode)
+            print(f"{run.name}: stopped; it resumes from its last checkpoint", flush=True)
     return failed
+
+
+def _export(plan: Plan, run: Run, env: dict[str, str]) -> bool:
+    """Exports ``run``'s best-validation model; its output goes to the run's ``train.log``."""
+    with open(plan.root / run.directory / "train.log", "a") as log:
+        result = subprocess.run(
+            plan.export_command(run), cwd=plan.root, env=env, stdout=log, stderr=log, check=False
+        )
+    return result.returncode == 0
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -239,7 +281,21 @@ def main(argv: list[str] | None = None) -> int:
         ap.error(str(err))
     env = dict(os.environ)
     env.setdefault("OMP_NUM_THREADS", "1")  # one core per run: the lanes share the machine
-    failed = run_campaign(plan, args.lanes, args.root, env)
+    if env.get("PYTHONPATH"):  # the trainers run in --root: keep the caller's entries valid
+        entries = env["PYTHONPATH"].split(os.pathsep)
+        env["PYTHONPATH"] = os.pathsep.join(str(Path(e).resolve()) for e in entries if e)
+    runs = plan.root / plan.runs
+    runs.mkdir(parents=True, exist_ok=True)
+    with open(runs / ".campaign.lock", "w") as lock:
+        try:
+            fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            ap.error(f"another campaign is running on {runs}")
+        try:
+            failed = run_campaign(plan, args.lanes, env)
+        except KeyboardInterrupt:
+            print("campaign: stopped", flush=True)
+            return 130
     print(f"campaign: {len(plan.schedule())} runs, {failed} failed", flush=True)
     return 1 if failed else 0
 

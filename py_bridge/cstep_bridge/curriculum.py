@@ -103,35 +103,51 @@ def training_fraction(
     return float(rng.uniform(0.0, level))
 
 
-def make_callback(curriculum: Curriculum, state: Path):
-    """An SB3 callback that sets the envs' ``goal_fraction`` and moves up the levels; the level
-    reached is kept in the JSON file ``state``, so a resumed run goes on from it."""
-    from stable_baselines3.common.callbacks import BaseCallback
+def level_at(state: Path, step: int) -> int:
+    """The curriculum level a run had reached by ``step``, from its ``state`` file (0 without
+    one): a run resumed from a checkpoint older than its last promotion goes on at the level of
+    that checkpoint. Files from before the history was kept hold only the last promotion; before
+    its step the level below it is taken."""
+    if not state.exists():
+        return 0
+    record = json.loads(state.read_text())
+    last = [record["step"], record["level"]]
+    history = record.get("history") or [[0, max(record["level"] - 1, 0)], last]
+    return max((level for at, level in history if at <= step), default=0)
 
-    start_level = json.loads(state.read_text())["level"] if state.exists() else 0
+
+def make_callback(curriculum: Curriculum, state: Path):
+    """An SB3 callback that sets the envs' ``goal_fraction`` and moves up the levels; each
+    promotion is kept in the JSON file ``state``, so a resumed run goes on from the level of the
+    checkpoint it resumes."""
+    from stable_baselines3.common.callbacks import BaseCallback
 
     class GoalCurriculum(BaseCallback):
         """Moves the training envs' goals out as the agent succeeds (see the module docstring)."""
 
         def _on_training_start(self) -> None:
-            self.level = start_level
+            self.level = level_at(state, self.num_timesteps)
+            self.history = (
+                json.loads(state.read_text()).get("history", []) if state.exists() else []
+            )
+            self.history = [h for h in self.history if h[0] <= self.num_timesteps] or [[0, 0]]
             self.outcomes: list[bool] = []
+            # On the env itself: VecEnv.set_attr would set it on the outermost wrapper (Monitor).
+            self.training_env.env_method(
+                "set_wrapper_attr", "full_task_share", curriculum.full_task_share
+            )
             self._apply()
 
         def _apply(self) -> None:
-            # On the env itself: VecEnv.set_attr would set it on the outermost wrapper (Monitor).
             self.training_env.env_method(
                 "set_wrapper_attr", "goal_fraction", curriculum.levels[self.level]
-            )
-            self.training_env.env_method(
-                "set_wrapper_attr", "full_task_share", curriculum.full_task_share
             )
             self.outcomes = []
 
         def _on_step(self) -> bool:
             for info in self.locals["infos"]:
                 # The Monitor marks an episode's last step; the full-task share does not count.
-                if "episode" in info and info.get("goal_fraction", 0.0) < 1.0:
+                if "episode" in info and info["episode_goal_fraction"] < 1.0:
                     self.outcomes.append(bool(info["success"] and not info["collision"]))
             last = self.level == len(curriculum.levels) - 1
             recent = self.outcomes[-curriculum.window :]
@@ -147,7 +163,9 @@ def make_callback(curriculum: Curriculum, state: Path):
                     flush=True,
                 )
                 self._apply()
-                state.write_text(json.dumps({"level": self.level, "step": self.num_timesteps}))
+                self.history.append([self.num_timesteps, self.level])
+                record = {"level": self.level, "step": self.num_timesteps, "history": self.history}
+                state.write_text(json.dumps(record))
             self.logger.record("cstep/goal_fraction", curriculum.levels[self.level])
             return True
 

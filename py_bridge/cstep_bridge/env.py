@@ -148,7 +148,8 @@ class EmpoweredRewardEnv(gym.Env):
     goal (the curriculum's ``full_task_share``); set with :attr:`goal_fraction`."""
     episode_goal_fraction = 1.0
     """How far along its start–goal line this episode's goal lies (1 = the task's goal); in every
-    step's ``info`` as ``goal_fraction``, so the curriculum can tell its level's episodes."""
+    step's ``info`` as ``episode_goal_fraction``, so the curriculum can tell its level's
+    episodes."""
 
     def _draw_goal_fraction(self, fixed: bool) -> float:
         """At reset: the fraction of the way to the task's goal that this episode's goal lies
@@ -172,7 +173,8 @@ class EmpoweredRewardEnv(gym.Env):
 
     def _info(self, state: DroneState, collision: bool) -> dict[str, Any]:
         """What every step reports: success so far, collision, sim time, centre distance to the
-        nearest obstacle, distance to the goal, and the position (x, y)."""
+        nearest obstacle, distance to the goal, the position (x, y), and how far along its
+        start–goal line the episode's goal lies (1 = the task's own goal)."""
         return {
             "success": self.success,
             "collision": collision,
@@ -180,7 +182,7 @@ class EmpoweredRewardEnv(gym.Env):
             "min_obstacle_distance": self.sim.min_obstacle_distance(state),
             "distance_to_goal": self._distance(state),
             "position": (float(state.position[0]), float(state.position[1])),
-            "goal_fraction": self.episode_goal_fraction,
+            "episode_goal_fraction": self.episode_goal_fraction,
         }
 
     @property

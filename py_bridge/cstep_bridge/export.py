@@ -47,24 +47,33 @@ def export(run: Path, which: str, out: Path) -> Path:
     model.policy.optimizer = model.policy.optimizer_class(
         model.policy.parameters(), lr=model.policy.optimizer.param_groups[0]["lr"]
     )  # fresh: no moments
-    out.mkdir(parents=True, exist_ok=True)
+    # Written beside ``out`` and renamed when whole: a failed or stopped export leaves no
+    # directory that looks done (the campaign takes an export's model.zip as the run's end).
+    partial = out.with_name(out.name + ".partial")
+    shutil.rmtree(partial, ignore_errors=True)
+    partial.mkdir(parents=True)
     settings = json.loads((run / "run.json").read_text())
     settings["exported_from"] = {"run": str(run), "model": src.name, "steps": model.num_timesteps}
-    (out / "run.json").write_text(json.dumps(settings, indent=2) + "\n")
-    target = out / "model.zip"
-    model.save(target)
+    (partial / "run.json").write_text(json.dumps(settings, indent=2) + "\n")
+    model.save(partial / "model.zip")
+    size = (partial / "model.zip").stat().st_size
+    if size > MAX_BYTES:
+        shutil.rmtree(partial)
+        raise SystemExit(
+            f"{src}: exports to {size} bytes, more than the {MAX_BYTES} a commit may take"
+        )
     stats = stats_path(src)
     if stats.exists():
-        shutil.copyfile(stats, stats_path(target))
+        shutil.copyfile(stats, stats_path(partial / "model.zip"))
     episodes = training_log.read_monitor(run / "monitor")
     if len(episodes):
-        training_log.write_episodes(episodes, out / training_log.TRAINING_CSV)
+        training_log.write_episodes(episodes, partial / training_log.TRAINING_CSV)
     if (run / training_log.VALIDATION_CSV).exists():
-        shutil.copyfile(run / training_log.VALIDATION_CSV, out / training_log.VALIDATION_CSV)
-    size = target.stat().st_size
-    if size > MAX_BYTES:
-        raise SystemExit(f"{target}: {size} bytes, more than the {MAX_BYTES} a commit may take")
-    return target
+        shutil.copyfile(run / training_log.VALIDATION_CSV, partial / training_log.VALIDATION_CSV)
+    if out.exists():
+        shutil.rmtree(out)
+    partial.rename(out)
+    return out / "model.zip"
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -37,6 +37,7 @@ import json
 import re
 import sys
 import time
+import zipfile
 from pathlib import Path
 from typing import Any
 
@@ -196,15 +197,24 @@ def execution_defaults(args: argparse.Namespace, settings: dict[str, Any]) -> No
         args.vec_env = "subproc" if args.n_envs > 1 else "dummy"
 
 
+def _whole_zip(path: Path) -> bool:
+    """Whether ``path`` is a readable zip; says so when it is not."""
+    if zipfile.is_zipfile(path):
+        return True
+    print(f"{path}: not a whole zip file (a save cut short?), passed over", flush=True)
+    return False
+
+
 def latest_checkpoint(out: Path) -> Path | None:
-    """The newest of ``model.zip`` and ``checkpoints/ppo_<N>_steps.zip`` by step count."""
+    """The newest of ``model.zip`` and ``checkpoints/ppo_<N>_steps.zip`` by step count; a file
+    that is not a whole zip (a save cut short when the run was stopped) is passed over."""
     best, best_steps = None, -1
     for path in (out / "checkpoints").glob("ppo_*_steps.zip"):
         m = re.fullmatch(r"ppo_(\d+)_steps\.zip", path.name)
-        if m and int(m.group(1)) > best_steps:
+        if m and int(m.group(1)) > best_steps and _whole_zip(path):
             best, best_steps = path, int(m.group(1))
     final = out / "model.zip"
-    if final.exists():
+    if final.exists() and _whole_zip(final):
         from stable_baselines3.common.save_util import load_from_zip_file
 
         data, _, _ = load_from_zip_file(final, device="cpu", load_data=True)

@@ -128,6 +128,7 @@ def test_check_env_on_the_unempowered_maze():
             "min_obstacle_distance",
             "distance_to_goal",
             "position",
+            "episode_goal_fraction",
         }
     finally:
         env.close()

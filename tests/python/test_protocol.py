@@ -173,12 +173,53 @@ def test_the_full_task_share_reaches_the_envs_and_marks_their_episodes(tmp_path)
             env.reset(seed=seed)
             arena = Arena.random(np.random.default_rng(seed))
             _, _, _, _, info = env.step(np.zeros(2, dtype=np.float32))
-            whole = info["goal_fraction"] == 1.0
+            whole = info["episode_goal_fraction"] == 1.0
             assert whole == bool(np.allclose(env.unwrapped.sim.arena.goal, arena.goal))
             kinds.append(whole)
         assert 3 <= sum(kinds) <= 17
     finally:
         venv.close()
+
+
+def test_only_the_levels_own_episodes_promote_and_promotions_are_kept_by_step(tmp_path):
+    """Episodes on the task's own goal (the full-task share) never move the level up; each
+    promotion is recorded with its step, and a run resumed from an earlier step goes on at the
+    level it had then."""
+    venv = make_vec_env(lambda: make_env("drone", empowered=False), n_envs=1, seed=3)
+    plan = curriculum.Curriculum((0.3, 0.6, 1.0), promote_at=1.0, window=3, full_task_share=0.5)
+    state = tmp_path / "c.json"
+    try:
+        model = PPO("MlpPolicy", venv, n_steps=16, batch_size=16, n_epochs=1, device="cpu")
+        callback = curriculum.make_callback(plan, state)
+        model.learn(16, callback=callback)  # binds the callback to the model and its env
+
+        def finish_episodes(fraction: float, count: int, step: int) -> None:
+            model.num_timesteps = step
+            for _ in range(count):
+                ended = {"episode": {}, "success": True, "collision": False}
+                callback.locals = {"infos": [{**ended, "episode_goal_fraction": fraction}]}
+                callback.on_step()
+
+        finish_episodes(1.0, 5, 1000)  # full-task successes
+        assert callback.level == 0 and not state.exists()
+        finish_episodes(0.2, 3, 2000)
+        assert callback.level == 1 and venv.envs[0].unwrapped.goal_fraction == 0.6
+        finish_episodes(0.5, 3, 3000)
+        assert callback.level == 2
+        assert json.loads(state.read_text())["history"] == [[0, 0], [2000, 1], [3000, 2]]
+        assert [curriculum.level_at(state, s) for s in (0, 1999, 2000, 2999, 5000)] == [
+            0,
+            0,
+            1,
+            1,
+            2,
+        ]
+    finally:
+        venv.close()
+    old = tmp_path / "old.json"  # written before promotions were kept by step
+    old.write_text(json.dumps({"level": 3, "step": 384016}))
+    assert curriculum.level_at(old, 350000) == 2 and curriculum.level_at(old, 384016) == 3
+    assert curriculum.level_at(tmp_path / "none.json", 10) == 0
 
 
 def test_the_curriculum_callback_moves_the_training_envs_goals(tmp_path):

@@ -1,7 +1,9 @@
 """Where does a drone policy fail, and how does it act? Flies a model's deterministic policy on the
 evaluation arenas and reports success by how close the goal lies to a wall, how many collisions
 were with the block, where the failed episodes ended, and how saturated the actions are (for a
-tanh-squashed gSDE policy also the size of its pre-squash mean and exploration noise).
+tanh-squashed gSDE policy also the size of its pre-squash mean and exploration noise), success
+and collisions by the start's offset from the block's centre line (is the block straight ahead?),
+and when the collisions happen.
 
     PYTHONPATH=py_bridge .venv/bin/python docs/results/drone/failure_modes.py \\
         --model docs/results/drone/models/unempowered-d17 --episodes 100
@@ -89,6 +91,7 @@ def main() -> int:
         env.close()
     a = np.array(rows, dtype=float)
     wall, success, collision, final = a[:, 0], a[:, 1], a[:, 2], a[:, 3]
+    ends, nearer_block, end_time, offset = a[:, 4:6], a[:, 8], a[:, 9], a[:, 10]
     print(f"# {path}: {len(a)} evaluation arenas\n")
     print(f"success {success.mean():.0%}, collisions {collision.mean():.0%}\n")
     print("| goal's distance to a wall (m) | arenas | success | median final distance (m) |")
@@ -103,14 +106,14 @@ def main() -> int:
     print("\n| start's offset from the block's centre line (m) | arenas | success | collisions |")
     print("|---|---:|---:|---:|")
     for lo, hi in itertools.pairwise(OFFSET_BINS):
-        sel = (a[:, 10] >= lo) & (a[:, 10] < hi)
+        sel = (offset >= lo) & (offset < hi)
         if sel.any():
             print(
                 f"| {lo:g}–{hi:g} | {sel.sum()} | {success[sel].mean():.0%} | "
                 f"{collision[sel].mean():.0%} |"
             )
     if collision.any():
-        hit_block = int(a[collision == 1, 8].sum())
+        hit_block = int(nearer_block[collision == 1].sum())
         print(
             f"\ncollisions: {int(collision.sum())}, {hit_block} of them ending nearer the block "
             "than a wall"
@@ -119,16 +122,16 @@ def main() -> int:
         print(
             f"collisions after the goal was reached: {int(after_goal.sum())}; collision times "
             f"(s) quantiles 10/50/90 %: "
-            + ", ".join(f"{v:.1f}" for v in np.quantile(a[collision == 1, 9], (0.1, 0.5, 0.9)))
+            + ", ".join(f"{v:.1f}" for v in np.quantile(end_time[collision == 1], (0.1, 0.5, 0.9)))
         )
     failed = (success == 0) & (collision == 0)
     if failed.any():
-        ends = a[failed][:, 4:6]
+        ended = ends[failed]
         print(
             f"\nfailed without a collision: {failed.sum()} arenas; they ended at x "
-            f"{np.median(ends[:, 0]):.2f} (median), y {np.median(ends[:, 1]):.2f}, "
+            f"{np.median(ended[:, 0]):.2f} (median), y {np.median(ended[:, 1]):.2f}, "
             f"{np.median(final[failed]):.2f} m from the goal; ending point's wall distance "
-            f"{np.median([wall_distance(env, e) for e in ends]):.2f} m (goals': "
+            f"{np.median([wall_distance(env, e) for e in ended]):.2f} m (goals': "
             f"{np.median(wall[failed]):.2f} m)"
         )
     acts = np.abs(np.array(actions))

@@ -1,12 +1,19 @@
 """Issue 12, failure 5: two nodes answering under one name on one domain must not mix their
 answers silently. A second `cstep node` refuses to start beside one that already serves its
 names; a node that sees another start serving its names later says so loudly (diagnostics ERROR)
-for as long as it does. Real nodes, real rclpy, real DDS, localhost only, a domain per test."""
+for as long as it does; the bridge takes a private domain nobody is on, and refuses a service
+that two nodes serve. Real nodes, real rclpy, real DDS, localhost only, a domain per test."""
 
 import subprocess
 import time
 
+import conftest
+import numpy as np
+import pytest
 from conftest import DISCOVERY_TIMEOUT_S, wait_until
+from cstep_bridge import ros_io
+from cstep_bridge.ros_io import RosBridge
+from cstep_bridge.sim import DroneState
 from cstep_msgs.srv import Evaluate
 from diagnostic_msgs.msg import DiagnosticStatus
 from node_rig import CONFIG, corridor_scan, cstep_binary, odometry
@@ -80,3 +87,41 @@ def test_a_node_says_so_while_another_serves_its_service(rig, start_peer):
         rig.executor,
         timeout=3 * DISCOVERY_TIMEOUT_S,
     )
+
+
+def test_the_bridge_takes_a_domain_nobody_is_on(
+    cstep_node, ros_context, executor, ros_domain, monkeypatch
+):
+    occupied = ros_domain
+    free = next(conftest._DOMAINS)  # this test's second domain, as the next test would get it
+    node = Node("cstep_test_occupant", context=ros_context)
+    executor.add_node(node)
+    client = node.create_client(Evaluate, "/cstep/evaluate")
+    wait_until(client.service_is_ready, "the occupying node's /cstep/evaluate", executor)
+    # The bridge's first candidate is the occupied domain (as when two trainers' candidates
+    # agreed), its second a free one.
+    candidates = iter([occupied, free])
+    monkeypatch.setattr(ros_io, "private_domain_id", lambda: next(candidates))
+    bridge = RosBridge(publish_sim_topics=False)
+    try:
+        assert bridge.domain_id == free
+        state = DroneState(
+            position=np.array([0.0, 0.0, 1.0]),
+            quaternion=np.array([0.0, 0.0, 0.0, 1.0]),
+            velocity=np.zeros(3),
+            angular_velocity=np.zeros(3),
+            rotation=np.eye(3),
+        )
+        reward = bridge.evaluate(state, np.full(180, 2.0), 1.0)
+        assert reward.valid, reward.status
+    finally:
+        bridge.close()
+    assert cstep_node.poll() is None  # the occupant was left alone
+    node.destroy_node()
+
+
+def test_the_bridge_refuses_a_service_two_nodes_serve(ros_domain, start_peer):
+    for _ in range(2):
+        start_peer("serve-evaluate-batch", "/cstep/evaluate_batch").expect("ready")
+    with pytest.raises(RuntimeError, match="2 nodes serve /cstep/evaluate_batch"):
+        RosBridge(domain_id=ros_domain, start_node=False, discovery_timeout=DISCOVERY_TIMEOUT_S)

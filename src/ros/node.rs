@@ -48,7 +48,8 @@ use crate::reward::{empowered_reward, floor_reward, task_reward};
 
 /// Runs the node until `stop` is set: loads the parameters files and `--ros-args`, joins the
 /// DDS domain `ROS_DOMAIN_ID` as far as `ROS_AUTOMATIC_DISCOVERY_RANGE` reaches
-/// ([`super::context`]), and serves.
+/// ([`super::context`]), and serves. An error if another node already answers under its names
+/// on that domain ([`super::rivals`]): the node then stops within its first seconds.
 pub fn run(config: &[PathBuf], ros_args: &RosArgs, stop: Arc<AtomicBool>) -> Result<(), String> {
     let node_name = ros_args.node_name.as_deref().unwrap_or(DEFAULT_NODE_NAME);
     let paths: Vec<&std::path::Path> = config
@@ -370,7 +371,8 @@ fn parameter_options(shared: &Arc<Shared>, settings: &crate::config::Settings) -
 }
 
 /// The DDS-side tasks: keep the newest odometry and goal, post scans, answer the service,
-/// publish diagnostics; returns when Ctrl-C was pressed.
+/// publish diagnostics, watch for rivals ([`Guard`]); returns when Ctrl-C was pressed, or when a
+/// rival found at start-up made the node refuse to run (the reason is in `Latest::refusal`).
 async fn serve(shared: &Arc<Shared>, ports: &Ports, node: &Node, guard: &Guard) {
     let odometry = ports.odom.async_stream().for_each(|received| async move {
         match received {

@@ -25,7 +25,7 @@ ROS_BUILD_ENV := $(VENV_ENV) \
 	AMENT_PREFIX_PATH=$(VENV_ABS) CMAKE_PREFIX_PATH=$(VENV_ABS) PATH=$(VENV_ABS)/bin:$$PATH
 
 .PHONY: test lint lint-rust lint-python test-rust test-python venv bench bench-latency bench-steps \
-	bench-train fuzz-cdr
+	bench-train bench-stale soak fuzz-cdr
 
 test: lint test-rust test-python
 
@@ -104,6 +104,19 @@ bench:
 bench-latency: $(MSGS_STAMP)
 	$(CARGO) build --release --quiet
 	$(VENV_ENV) CSTEP_BIN=$(abspath $(TARGET_DIR))/release/cstep $(VPY) benches/python/bench_latency.py
+
+# How long after odometry stops the node's diagnostics say STALE (bound: input_timeout + one
+# diagnostics period); BENCH_STALE_ARGS adds options (--repeats, --seed).
+bench-stale: $(MSGS_STAMP)
+	$(CARGO) build --release --quiet
+	$(VENV_ENV) CSTEP_BIN=$(abspath $(TARGET_DIR))/release/cstep $(VPY) benches/python/bench_stale.py $(BENCH_STALE_ARGS)
+
+# Soak: 1080-beam scans at 200 Hz for 10 minutes with a score subscriber; prints the node's RSS
+# over time, scored + skipped against sent, and latency p50/p99. SOAK_ARGS adds options
+# (--duration S for a shorter try, --rate, --beams, --every).
+soak: $(MSGS_STAMP)
+	$(CARGO) build --release --quiet
+	$(VENV_ENV) CSTEP_BIN=$(abspath $(TARGET_DIR))/release/cstep $(VPY) benches/python/soak.py $(SOAK_ARGS)
 
 # Environment steps per second, unempowered vs empowered reward, on one core.
 bench-steps: $(MSGS_STAMP)

@@ -28,7 +28,10 @@ reward ``task_reward · (ln c + floor)``.
 
 Either way a missing reply raises :class:`RewardTimeout` after ``timeout`` seconds: never a silent 0.
 When no node is given, :class:`CStepNode` starts a private ``cstep node`` on its own ROS domain
-(localhost-only discovery) and kills it by its PID on close.
+(localhost-only discovery) and kills it by its PID on close. That domain is one the bridge has
+watched for :data:`PROBE_S` seconds with its own node on it and found nobody else on
+(:func:`others_on_domain`), so two trainers never share a node; and whatever the domain, the
+bridge refuses a service that more than one node serves (their answers would mix).
 """
 
 from __future__ import annotations
@@ -37,6 +40,7 @@ import array
 import itertools
 import math
 import os
+import random
 import signal
 import subprocess
 import tempfile
@@ -89,12 +93,45 @@ class RewardTimeout(RuntimeError):
     """The node did not answer in time."""
 
 
+# How long the bridge watches a candidate domain, its own node on it, for other participants
+# before taking it (s). Discovery between two processes on localhost takes 1-2 s, occasionally 4.
+PROBE_S = 4.0
+# Candidate domains watched before giving up.
+DOMAIN_TRIES = 20
+
 _DOMAIN_COUNTER = itertools.count()
+# Where this process's candidates start: random, as two trainers' process ids agreeing mod 100
+# once gave them one domain (issue 12, failure 5).
+_DOMAIN_OFFSET = random.SystemRandom().randrange(100)
 
 
 def private_domain_id() -> int:
-    """A domain id in 1..100 unlikely to be shared: offset by this process id, then counted up."""
-    return 1 + (os.getpid() + 37 * next(_DOMAIN_COUNTER)) % 100
+    """The next candidate for a private domain: 1..100, from this process's random offset, each
+    call 37 further (so 100 calls visit every domain once). Not known to be free:
+    :class:`RosBridge` watches each candidate first."""
+    return 1 + (_DOMAIN_OFFSET + 37 * next(_DOMAIN_COUNTER)) % 100
+
+
+def others_on_domain(node: Node) -> list[str]:
+    """What ``node``'s graph shows of other participants on its domain: other nodes, services,
+    and topics with an endpoint not of ``node`` (a DDS participant that is no ROS node shows
+    up here too, its endpoints' node unknown)."""
+    me = (node.get_name(), node.get_namespace())
+    found = [
+        f"node {ns.rstrip('/')}/{name}"
+        for name, ns in node.get_node_names_and_namespaces()
+        if (name, ns) != me
+    ]
+    own = {name for name, _ in node.get_service_names_and_types_by_node(*me)}
+    found += [
+        f"service {name}" for name, _ in node.get_service_names_and_types() if name not in own
+    ]
+    for topic, _ in node.get_topic_names_and_types():
+        endpoints = node.get_publishers_info_by_topic(topic)
+        endpoints += node.get_subscriptions_info_by_topic(topic)
+        if any((e.node_name, e.node_namespace) != me for e in endpoints):
+            found.append(f"topic {topic}")
+    return found
 
 
 def stamp(t: float) -> Time:
@@ -219,7 +256,9 @@ class RosBridge:
     """rclpy side: fetches rewards for simulated states and publishes the simulation's odometry,
     scan and clock.
 
-    ``domain_id=None`` with ``start_node=True`` picks a private domain and starts a node on it.
+    ``domain_id=None`` with ``start_node=True`` picks a private domain that nobody else is on
+    (watched first, see :meth:`_join_free_domain`) and starts a node on it. Whatever the domain,
+    the bridge checks that exactly one node serves the evaluate service.
     ``publish_sim_topics``: in service mode, whether :meth:`evaluate` also publishes ``/odom``,
     ``/scan`` and ``/clock`` for other listeners (nothing the reward needs; the topic mode always
     publishes them).
@@ -242,23 +281,20 @@ class RosBridge:
         self.publish_sim_topics = publish_sim_topics or mode == "topic"
         self.timeout = timeout
         self.safety_coefficient = float(safety_coefficient)
-        if domain_id is None:
-            domain_id = (
-                private_domain_id() if start_node else int(os.environ.get("ROS_DOMAIN_ID", "0"))
-            )
-        self.domain_id = domain_id
         self.cstep: CStepNode | None = None
-        if start_node:
-            self.cstep = CStepNode(domain_id, safety_coefficient, extra_params=node_params)
+        self.node: Node | None = None
         # Localhost-only discovery for this process's participant too (read by rmw at init).
         os.environ.setdefault("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
-        self.context = Context()
-        rclpy.init(context=self.context, domain_id=domain_id)
-        self.executor = SingleThreadedExecutor(context=self.context)
-        self.node = Node(
-            f"cstep_bridge_{os.getpid()}_{next(_DOMAIN_COUNTER)}", context=self.context
-        )
-        self.executor.add_node(self.node)
+        # Whether this bridge watched the domain, finding nobody, before its node started.
+        self._watched = domain_id is None and start_node
+        if self._watched:
+            self._join_free_domain()
+        else:
+            if domain_id is None:
+                domain_id = int(os.environ.get("ROS_DOMAIN_ID", "0"))
+            self._join(domain_id)
+        if start_node:
+            self.cstep = CStepNode(self.domain_id, safety_coefficient, extra_params=node_params)
         n = self.node
         self.odom_pub = n.create_publisher(Odometry, "odom", RELIABLE)
         self.scan_pub = n.create_publisher(LaserScan, "scan", qos_profile_sensor_data)
@@ -275,6 +311,48 @@ class RosBridge:
         except BaseException:
             self.close()
             raise
+
+    def _join(self, domain_id: int) -> None:
+        """This bridge's rclpy context, executor and node on ``domain_id``."""
+        self.domain_id = domain_id
+        self.context = Context()
+        rclpy.init(context=self.context, domain_id=domain_id)
+        self.executor = SingleThreadedExecutor(context=self.context)
+        # No parameter services and no rosout: a graph with nothing of others shows nothing.
+        self.node = Node(
+            f"cstep_bridge_{os.getpid()}_{next(_DOMAIN_COUNTER)}",
+            context=self.context,
+            start_parameter_services=False,
+            enable_rosout=False,
+        )
+        self.executor.add_node(self.node)
+
+    def _leave(self) -> None:
+        self.node.destroy_node()
+        self.node = None
+        self.executor.shutdown()
+        self.context.try_shutdown()
+
+    def _join_free_domain(self) -> None:
+        """Joins the first candidate domain (:func:`private_domain_id`) on which this bridge's
+        node, watched for :data:`PROBE_S` seconds, sees nobody else. A bridge that arrives on
+        the domain later sees this one and moves on; two that arrive together see each other
+        and both move on (to different candidates: their offsets are random)."""
+        tried: list[str] = []
+        for _ in range(DOMAIN_TRIES):
+            self._join(private_domain_id())
+            end = time.monotonic() + PROBE_S
+            while time.monotonic() < end:
+                self.executor.spin_once(timeout_sec=0.05)
+            others = others_on_domain(self.node)
+            if not others:
+                return
+            tried.append(f"{self.domain_id} ({', '.join(others[:3])})")
+            self._leave()
+        raise RuntimeError(
+            f"no free ROS domain for a private cstep node after {DOMAIN_TRIES} tries; "
+            f"occupied: {'; '.join(tried)}"
+        )
 
     def _on_reward(self, msg: EmpoweredReward) -> None:
         self.rewards[(msg.header.stamp.sec, msg.header.stamp.nanosec)] = msg
@@ -352,6 +430,23 @@ class RosBridge:
         probe.pose.pose.orientation.w = 1.0
         request = EvaluateBatch.Request(odom=[probe], scan=[scan_msg(np.full(2, np.inf), 0.0)])
         self._call(request, timeout - (time.monotonic() - start))
+        # One answer came back; had another node answered too, their answers would mix. On a
+        # domain this bridge did not watch before its node started (one it was given), give
+        # discovery a watch's time to show any other server first.
+        if not self._watched:
+            self._spin_until(
+                lambda: (
+                    time.monotonic() - start >= PROBE_S or self.node.count_services(SERVICE) > 1
+                ),
+                PROBE_S + 1.0,
+                "a second server",
+            )
+        servers = self.node.count_services(SERVICE)
+        if servers != 1:
+            raise RuntimeError(
+                f"{servers} nodes serve {SERVICE} on ROS_DOMAIN_ID {self.domain_id}: their "
+                "answers would mix; stop all but one, or use another domain"
+            )
         if self.mode == "topic":
             self._spin_until(
                 lambda: (
@@ -499,11 +594,9 @@ class RosBridge:
 
     def close(self) -> None:
         if getattr(self, "node", None) is not None:
-            self._reply_wait.destroy_when_not_in_use()
-            self.node.destroy_node()
-            self.node = None
-            self.executor.shutdown()
-            self.context.try_shutdown()
+            if hasattr(self, "_reply_wait"):
+                self._reply_wait.destroy_when_not_in_use()
+            self._leave()
         if self.cstep is not None:
             self.cstep.close()
             self.cstep = None

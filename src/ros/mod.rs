@@ -12,5 +12,6 @@ pub mod echo;
 pub mod markers;
 pub mod messages;
 pub mod node;
+pub mod rivals;
 pub mod stamps;
 pub mod yaml;

@@ -22,6 +22,7 @@ use std::time::{Duration, Instant};
 
 use futures::StreamExt;
 use rayon::prelude::*;
+use ros2_client::dds::rustdds::RTPSEntity;
 use ros2_client::qos::{Durability, History, WhenFull};
 use ros2_client::{
     Message, MessageTypeName, Name, Node, NodeName, NodeOptions, ParameterValue, Publisher,
@@ -39,6 +40,7 @@ use super::messages::{
     EvaluateBatchResponse, EvaluateRequest, EvaluateResponse, Header, KeyValue, LaserScan,
     MarkerArray, Odometry, Point, PoseStamped, Time,
 };
+use super::rivals::{self, Claims, Verdict};
 use super::stamps::{Order, StampOrder};
 use crate::config::{load_all, NodeSettings, DEFAULT_NODE_NAME};
 use crate::estimator::{Estimator, EMPOWERMENT_FLOOR};
@@ -46,7 +48,8 @@ use crate::reward::{empowered_reward, floor_reward, task_reward};
 
 /// Runs the node until `stop` is set: loads the parameters files and `--ros-args`, joins the
 /// DDS domain `ROS_DOMAIN_ID` as far as `ROS_AUTOMATIC_DISCOVERY_RANGE` reaches
-/// ([`super::context`]), and serves.
+/// ([`super::context`]), and serves. An error if another node already answers under its names
+/// on that domain ([`super::rivals`]): the node then stops within its first seconds.
 pub fn run(config: &[PathBuf], ros_args: &RosArgs, stop: Arc<AtomicBool>) -> Result<(), String> {
     let node_name = ros_args.node_name.as_deref().unwrap_or(DEFAULT_NODE_NAME);
     let paths: Vec<&std::path::Path> = config
@@ -75,6 +78,18 @@ pub fn run(config: &[PathBuf], ros_args: &RosArgs, stop: Arc<AtomicBool>) -> Res
         )
         .map_err(|e| format!("cannot create the node: {e:?}"))?;
     let ports = Ports::open(&mut node, &interface, ros_args, namespace)?;
+    let named = |name: &str| resolve(namespace, ros_args.remap(name));
+    let guard = Guard {
+        claims: Claims::new()
+            .topic(&named(&interface.empowerment_topic))
+            .topic(&named(&interface.reward_topic))
+            .service(&named(&interface.evaluate_service))
+            .service(&named(&interface.evaluate_batch_service)),
+        participant: context.domain_participant(),
+        started: Instant::now(),
+        node: node.fully_qualified_name(),
+        domain: context.domain_id(),
+    };
     eprintln!(
         "cstep node {} on ROS_DOMAIN_ID {}: {} + {} -> {}, {} (markers on {} while subscribed); \
          services {}, {}",
@@ -102,13 +117,46 @@ pub fn run(config: &[PathBuf], ros_args: &RosArgs, stop: Arc<AtomicBool>) -> Res
     executor
         .spawn(node.spinner().map_err(|e| format!("{e:?}"))?.spin())
         .detach();
-    smol::block_on(executor.run(serve(&shared, &ports, &node)));
+    smol::block_on(executor.run(serve(&shared, &ports, &node, &guard)));
+    shared.stopping.store(true, Ordering::SeqCst);
     shared.arrived.notify_all();
     worker
         .join()
         .map_err(|_| "the scoring thread failed".to_owned())?;
+    if let Some(refusal) = shared.latest().refusal.take() {
+        return Err(refusal);
+    }
     eprintln!("cstep node stopped");
     Ok(())
+}
+
+/// Watches DDS discovery for another participant answering under this node's names
+/// ([`super::rivals`]).
+struct Guard {
+    claims: Claims,
+    participant: ros2_client::dds::rustdds::DomainParticipant,
+    started: Instant,
+    /// This node's fully qualified name and domain, for the messages.
+    node: String,
+    domain: u16,
+}
+
+impl Guard {
+    /// The verdict on the writers discovery has reported so far.
+    fn check(&self) -> Verdict {
+        let own = format!("{:?}", self.participant.guid().prefix);
+        let writers = self.participant.discovered_writers();
+        let rivals = self.claims.rivals(
+            writers.iter().map(|w| {
+                (
+                    w.publication_topic_data.topic_name.as_str(),
+                    format!("{:?}", w.writer_proxy.remote_writer_guid.prefix),
+                )
+            }),
+            &own,
+        );
+        rivals::verdict(&rivals, self.started.elapsed(), &self.node, self.domain)
+    }
 }
 
 /// What the DDS side and the scoring thread share.
@@ -156,6 +204,12 @@ struct Latest {
     /// The newest time jump, until a diagnostics message has said so (once, whatever other
     /// problem or staleness comes with it).
     time_jump: Option<String>,
+    /// Another participant answering under this node's names, found after the start-up window:
+    /// the warning, while it lasts (diagnostics are ERROR meanwhile).
+    rival: Option<String>,
+    /// Another participant answering under this node's names, found at start: why the node
+    /// stopped.
+    refusal: Option<String>,
 }
 
 /// The node's topics and services.
@@ -317,8 +371,9 @@ fn parameter_options(shared: &Arc<Shared>, settings: &crate::config::Settings) -
 }
 
 /// The DDS-side tasks: keep the newest odometry and goal, post scans, answer the service,
-/// publish diagnostics; returns when Ctrl-C was pressed.
-async fn serve(shared: &Arc<Shared>, ports: &Ports, node: &Node) {
+/// publish diagnostics, watch for rivals ([`Guard`]); returns when Ctrl-C was pressed, or when a
+/// rival found at start-up made the node refuse to run (the reason is in `Latest::refusal`).
+async fn serve(shared: &Arc<Shared>, ports: &Ports, node: &Node, guard: &Guard) {
     let odometry = ports.odom.async_stream().for_each(|received| async move {
         match received {
             Ok((odom, _)) => shared.latest().odom = Some((odom, Instant::now())),
@@ -375,6 +430,26 @@ async fn serve(shared: &Arc<Shared>, ports: &Ports, node: &Node) {
             let _ = ports.diagnostics.publish(shared.diagnostics());
         }
     };
+    let rivals = async {
+        loop {
+            smol::Timer::after(rivals::CHECK_PERIOD).await;
+            let verdict = guard.check();
+            let mut latest = shared.latest();
+            match verdict {
+                Verdict::Alone => latest.rival = None,
+                Verdict::Refuse(line) => {
+                    latest.refusal = Some(line);
+                    return;
+                }
+                Verdict::Warn(line) => {
+                    if latest.rival.as_ref() != Some(&line) {
+                        eprintln!("cstep: warning: {line}");
+                    }
+                    latest.rival = Some(line);
+                }
+            }
+        }
+    };
     let stopped = async {
         while !shared.stopping.load(Ordering::SeqCst) {
             smol::Timer::after(Duration::from_millis(50)).await;
@@ -387,6 +462,7 @@ async fn serve(shared: &Arc<Shared>, ports: &Ports, node: &Node) {
         Box::pin(service),
         Box::pin(batch_service),
         Box::pin(diagnostics),
+        Box::pin(rivals),
         Box::pin(stopped),
     ])
     .await;
@@ -741,7 +817,12 @@ impl Shared {
         let scan_age = age(latest.last_scan);
         let fresh = |a: Option<f64>| a.is_some_and(|a| a <= self.timeout.as_secs_f64());
         let jump = latest.time_jump.take();
-        let (level, message) = if !fresh(odom_age) || !fresh(scan_age) {
+        let (level, message) = if let Some(rival) = &latest.rival {
+            (
+                2,
+                jump.map_or_else(|| rival.clone(), |jump| format!("{rival}; {jump}")),
+            )
+        } else if !fresh(odom_age) || !fresh(scan_age) {
             let stale = "inputs stale: no score";
             (
                 3,

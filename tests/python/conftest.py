@@ -8,6 +8,7 @@ process a test starts, so tests never see each other's traffic and nothing leave
 import itertools
 import os
 import queue
+import signal
 import subprocess
 import sys
 import threading
@@ -125,6 +126,12 @@ class Peer:
             self.output.append(line)
             if line.startswith(prefix):
                 return line[len(prefix) :]
+
+    def interrupt(self) -> int:
+        """Ctrl-C: the peer leaves the domain cleanly (its endpoints are withdrawn at once, not
+        when their lease runs out); its exit code."""
+        self.proc.send_signal(signal.SIGINT)  # by PID
+        return self.proc.wait(timeout=DISCOVERY_TIMEOUT_S)
 
     def stop(self) -> None:
         if self.proc.poll() is None:

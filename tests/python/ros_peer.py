@@ -10,7 +10,9 @@ stdout, one line per event:
     ros_peer.py serve-evaluate SERVICE
         Serves SERVICE (cstep_msgs/srv/Evaluate) with an answer derived field by field from the
         request (see ``answer``), prints ``ready`` and ``served N`` after each call; runs until
-        killed.
+        killed or interrupted (SIGINT: it leaves the domain cleanly).
+    ros_peer.py serve-evaluate-batch SERVICE
+        Serves SERVICE (cstep_msgs/srv/EvaluateBatch) with an empty answer; prints ``ready``.
 
 Not a stand-in for cstep: it checks the interface package and the transport, nothing more.
 """
@@ -22,7 +24,8 @@ import time
 
 import rclpy
 from cstep_msgs.msg import Empowerment
-from cstep_msgs.srv import Evaluate
+from cstep_msgs.srv import Evaluate, EvaluateBatch
+from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 
@@ -107,8 +110,23 @@ def serve_evaluate(node: Node, service: str) -> int:
 
     node.create_service(Evaluate, service, callback)
     say("ready")
-    rclpy.spin(node)
+    spin(node)
     return 0
+
+
+def serve_evaluate_batch(node: Node, service: str) -> int:
+    node.create_service(EvaluateBatch, service, lambda _request, response: response)
+    say("ready")
+    spin(node)
+    return 0
+
+
+def spin(node: Node) -> None:
+    """Spins until killed or interrupted; on SIGINT, returns so the node is destroyed."""
+    try:
+        rclpy.spin(node)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
 
 
 def main() -> int:
@@ -120,6 +138,8 @@ def main() -> int:
             return echo_empowerment(node, name)
         if mode == "serve-evaluate":
             return serve_evaluate(node, name)
+        if mode == "serve-evaluate-batch":
+            return serve_evaluate_batch(node, name)
         say(f"error: unknown mode {mode}")
         return 2
     finally:

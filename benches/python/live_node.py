@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import array
 import os
-import signal
 import subprocess
 import sys
 import time
@@ -26,7 +25,7 @@ from sensor_msgs.msg import LaserScan
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "tests" / "python"))
 
-from node_rig import CONFIG, corridor_scan, cstep_binary, odometry
+from node_rig import CONFIG, corridor_scan, cstep_binary, odometry, stop_gently
 
 RELIABLE = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE)
 DISCOVERY_TIMEOUT_S = 20.0
@@ -69,13 +68,7 @@ class LiveNode:
         return self
 
     def __exit__(self, *_exc) -> None:
-        if self.proc.poll() is None:
-            self.proc.send_signal(signal.SIGINT)
-            try:
-                self.proc.wait(timeout=5)
-            except subprocess.TimeoutExpired:
-                self.proc.kill()
-                self.proc.wait(timeout=5)
+        stop_gently(self.proc)
 
 
 class Feeder:

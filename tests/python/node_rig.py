@@ -54,13 +54,19 @@ def cstep_node(ros_domain):
             cwd=REPO,
         )
         yield proc
-        if proc.poll() is None:
-            proc.send_signal(signal.SIGINT)
-            try:
-                proc.wait(timeout=5)
-            except subprocess.TimeoutExpired:
-                proc.kill()
-                proc.wait(timeout=5)
+        stop_gently(proc)
+
+
+def stop_gently(proc: subprocess.Popen) -> None:
+    """Stops a node as Ctrl-C does (it shuts down cleanly), killing it if it has not ended 5 s
+    later; nothing when it has ended already."""
+    if proc.poll() is None:
+        proc.send_signal(signal.SIGINT)
+        try:
+            proc.wait(timeout=5)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            proc.wait(timeout=5)
 
 
 def cstep_eval(tmp_path, odom, scan, goal=None, params: dict[str, str] | None = None) -> dict:

@@ -10,7 +10,6 @@ address: it must get nothing back from a LOCALHOST node, and does from a SUBNET 
 import os
 import re
 import shutil
-import signal
 import socket
 import subprocess
 import sys
@@ -19,7 +18,7 @@ from pathlib import Path
 
 import pytest
 from conftest import DISCOVERY_TIMEOUT_S, HERE, REPO
-from node_rig import CONFIG, cstep_binary
+from node_rig import CONFIG, cstep_binary, stop_gently
 
 LOOPBACK = "127.0.0.1"
 BANNER = re.compile(r"^cstep node \S+ on ROS_DOMAIN_ID")
@@ -75,13 +74,7 @@ class Node:
         return self.log.read_text()
 
     def stop(self) -> None:
-        if self.proc.poll() is None:
-            self.proc.send_signal(signal.SIGINT)
-            try:
-                self.proc.wait(timeout=5)
-            except subprocess.TimeoutExpired:
-                self.proc.kill()
-                self.proc.wait(timeout=5)
+        stop_gently(self.proc)
 
 
 @pytest.fixture

@@ -20,6 +20,20 @@ from cstep_bridge.resources import ResourceNotFound
 from cstep_bridge.ros_io import CStepNode
 
 
+def run_python(script: str, cwd: Path, env: dict[str, str]) -> subprocess.CompletedProcess:
+    """This interpreter running ``script`` in ``cwd`` with exactly ``env`` (as a user's shell
+    would, outside the test process's sys.path)."""
+    return subprocess.run(
+        [sys.executable, "-c", script],
+        cwd=cwd,
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=120,
+        check=False,
+    )
+
+
 def test_the_venv_imports_cstep_bridge_without_pythonpath(tmp_path):
     """`make venv` installs the package (editable): a plain `python -c` outside the checkout
     finds it, its installed metadata and its Gymnasium ids."""
@@ -29,15 +43,7 @@ def test_the_venv_imports_cstep_bridge_without_pythonpath(tmp_path):
         "print(importlib.metadata.version('cstep_bridge'), cstep_bridge.__version__)\n"
         "print(gymnasium.spec('cstep/Drone-v0').entry_point)\n"
     )
-    run = subprocess.run(
-        [sys.executable, "-c", script],
-        cwd=tmp_path,
-        env=env,
-        capture_output=True,
-        text=True,
-        timeout=120,
-        check=False,
-    )
+    run = run_python(script, tmp_path, env)
     assert run.returncode == 0, (
         f"{sys.executable} cannot import cstep_bridge without PYTHONPATH (make venv installs "
         f"it):\n{run.stderr}"
@@ -220,15 +226,7 @@ def test_a_copy_outside_the_checkout_finds_the_node_files_only_where_told(tmp_pa
         "print('urdf', env.unwrapped.sim.urdf)\n"
         "env.close()\n"
     )
-    run = subprocess.run(
-        [sys.executable, "-c", script],
-        cwd=tmp_path,
-        env=env,
-        capture_output=True,
-        text=True,
-        timeout=120,
-        check=False,
-    )
+    run = run_python(script, tmp_path, env)
     assert run.returncode == 0, run.stderr
     # Our lines by their first word: PyBullet prints its banner to the same stdout.
     printed = dict(line.split(" ", 1) for line in run.stdout.splitlines() if " " in line)

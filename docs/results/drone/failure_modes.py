@@ -50,6 +50,17 @@ def noise_and_mean(model: PPO, observations: np.ndarray) -> tuple[np.ndarray, np
     return dist.loc.abs().numpy(), dist.scale.numpy()
 
 
+def binned_table(header: str, values: np.ndarray, bins, cells) -> None:
+    """Prints a Markdown table with one row per bin of ``values`` that holds any arena: the bin,
+    its arena count and ``cells(selection)`` (the row's remaining cells)."""
+    print(header)
+    print("|---|---:|---:|---:|")
+    for lo, hi in itertools.pairwise(bins):
+        sel = (values >= lo) & (values < hi)
+        if sel.any():
+            print(f"| {lo:g}–{hi:g} | {sel.sum()} | {cells(sel)} |")
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--model", type=Path, required=True, help="a run or model directory, or .zip")
@@ -94,24 +105,18 @@ def main() -> int:
     ends, nearer_block, end_time, offset = a[:, 4:6], a[:, 8], a[:, 9], a[:, 10]
     print(f"# {path}: {len(a)} evaluation arenas\n")
     print(f"success {success.mean():.0%}, collisions {collision.mean():.0%}\n")
-    print("| goal's distance to a wall (m) | arenas | success | median final distance (m) |")
-    print("|---|---:|---:|---:|")
-    for lo, hi in itertools.pairwise(WALL_BINS):
-        sel = (wall >= lo) & (wall < hi)
-        if sel.any():
-            print(
-                f"| {lo:g}–{hi:g} | {sel.sum()} | {success[sel].mean():.0%} | "
-                f"{np.median(final[sel]):.2f} |"
-            )
-    print("\n| start's offset from the block's centre line (m) | arenas | success | collisions |")
-    print("|---|---:|---:|---:|")
-    for lo, hi in itertools.pairwise(OFFSET_BINS):
-        sel = (offset >= lo) & (offset < hi)
-        if sel.any():
-            print(
-                f"| {lo:g}–{hi:g} | {sel.sum()} | {success[sel].mean():.0%} | "
-                f"{collision[sel].mean():.0%} |"
-            )
+    binned_table(
+        "| goal's distance to a wall (m) | arenas | success | median final distance (m) |",
+        wall,
+        WALL_BINS,
+        lambda sel: f"{success[sel].mean():.0%} | {np.median(final[sel]):.2f}",
+    )
+    binned_table(
+        "\n| start's offset from the block's centre line (m) | arenas | success | collisions |",
+        offset,
+        OFFSET_BINS,
+        lambda sel: f"{success[sel].mean():.0%} | {collision[sel].mean():.0%}",
+    )
     if collision.any():
         hit_block = int(nearer_block[collision == 1].sum())
         print(

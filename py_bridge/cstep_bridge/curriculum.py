@@ -103,17 +103,21 @@ def training_fraction(
     return float(rng.uniform(0.0, level))
 
 
-def level_at(state: Path, step: int) -> int:
-    """The curriculum level a run had reached by ``step``, from its ``state`` file (0 without
-    one): a run resumed from a checkpoint older than its last promotion goes on at the level of
-    that checkpoint. Files from before the history was kept hold only the last promotion; before
-    its step the level below it is taken."""
+def promotions(state: Path) -> list[list[int]]:
+    """The ``[step, level]`` promotions kept in a run's ``state`` file, from ``[0, 0]`` (only that
+    without one). Files from before the history was kept hold only the last promotion; before its
+    step the level below it is taken."""
     if not state.exists():
-        return 0
+        return [[0, 0]]
     record = json.loads(state.read_text())
     last = [record["step"], record["level"]]
-    history = record.get("history") or [[0, max(record["level"] - 1, 0)], last]
-    return max((level for at, level in history if at <= step), default=0)
+    return record.get("history") or [[0, max(record["level"] - 1, 0)], last]
+
+
+def level_at(state: Path, step: int) -> int:
+    """The curriculum level a run had reached by ``step``: a run resumed from a checkpoint older
+    than its last promotion goes on at the level of that checkpoint."""
+    return max((level for at, level in promotions(state) if at <= step), default=0)
 
 
 def make_callback(curriculum: Curriculum, state: Path):
@@ -126,11 +130,8 @@ def make_callback(curriculum: Curriculum, state: Path):
         """Moves the training envs' goals out as the agent succeeds (see the module docstring)."""
 
         def _on_training_start(self) -> None:
-            self.level = level_at(state, self.num_timesteps)
-            self.history = (
-                json.loads(state.read_text()).get("history", []) if state.exists() else []
-            )
-            self.history = [h for h in self.history if h[0] <= self.num_timesteps] or [[0, 0]]
+            self.history = [h for h in promotions(state) if h[0] <= self.num_timesteps]
+            self.level = max(level for _, level in self.history)
             self.outcomes: list[bool] = []
             # On the env itself: VecEnv.set_attr would set it on the outermost wrapper (Monitor).
             self.training_env.env_method(

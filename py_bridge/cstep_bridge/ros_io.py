@@ -99,17 +99,23 @@ PROBE_S = 4.0
 # Candidate domains watched before giving up.
 DOMAIN_TRIES = 20
 
+# The domains private bridges (training runs) pick from. Fast DDS's ports stay clear of Linux's
+# ephemeral range up to domain 101 and 0 is everyone's default; the tests take the domains above
+# these (tests/python/conftest.py), so a test run beside a training run never lands on its domain.
+PRIVATE_DOMAINS = range(1, 51)
+
 _DOMAIN_COUNTER = itertools.count()
 # Where this process's candidates start: random, as two trainers' process ids agreeing mod 100
 # once gave them one domain (issue 12, failure 5).
-_DOMAIN_OFFSET = random.SystemRandom().randrange(100)
+_DOMAIN_OFFSET = random.SystemRandom().randrange(len(PRIVATE_DOMAINS))
 
 
 def private_domain_id() -> int:
-    """The next candidate for a private domain: 1..100, from this process's random offset, each
-    call 37 further (so 100 calls visit every domain once). Not known to be free:
-    :class:`RosBridge` watches each candidate first."""
-    return 1 + (_DOMAIN_OFFSET + 37 * next(_DOMAIN_COUNTER)) % 100
+    """The next candidate for a private domain in :data:`PRIVATE_DOMAINS`, from this process's
+    random offset, each call 37 further (37 is prime to their count, so as many calls visit every
+    domain once). Not known to be free: :class:`RosBridge` watches each candidate first."""
+    step = (_DOMAIN_OFFSET + 37 * next(_DOMAIN_COUNTER)) % len(PRIVATE_DOMAINS)
+    return PRIVATE_DOMAINS[step]
 
 
 def others_on_domain(node: Node) -> list[str]:

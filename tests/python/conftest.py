@@ -26,12 +26,22 @@ REPO = HERE.parent.parent
 # py_bridge/ (the cstep_bridge package) straight from this checkout, whatever checkout the venv's
 # editable install points at (worktrees may share one venv); test_package.py checks the install.
 sys.path.insert(0, str(REPO / "py_bridge"))
+from cstep_bridge.ros_io import PRIVATE_DOMAINS
 
-# Domains 1..100 (0 is everyone's default; Fast DDS ports stay clear of the ephemeral range
-# up to 101). Start at an offset from this process id so that two test runs on one machine
-# (two worktrees, say) are unlikely to share a domain; CSTEP_TEST_DOMAIN_BASE pins the start.
-_BASE = int(os.environ.get("CSTEP_TEST_DOMAIN_BASE", os.getpid() % 100))
-_DOMAINS = (1 + (_BASE + i) % 100 for i in itertools.count())
+# Tests take the domains from the end of the bridge's private ones to 100 (Fast DDS ports stay clear
+# of the ephemeral range up to 101): a training run's private domain is never a test's. Start at an
+# offset from this process id so that two test runs on one machine (two worktrees, say) are
+# unlikely to share a domain; CSTEP_TEST_DOMAIN_BASE pins the start.
+TEST_DOMAINS = range(PRIVATE_DOMAINS.stop, 101)
+_BASE = int(os.environ.get("CSTEP_TEST_DOMAIN_BASE", os.getpid() % len(TEST_DOMAINS)))
+_DOMAINS = (TEST_DOMAINS[(_BASE + i) % len(TEST_DOMAINS)] for i in itertools.count())
+
+
+def other_test_domain(domain: int) -> int:
+    """A test domain half the range away from ``domain``: one no test near it in time uses."""
+    half = len(TEST_DOMAINS) // 2
+    return TEST_DOMAINS[(TEST_DOMAINS.index(domain) + half) % len(TEST_DOMAINS)]
+
 
 # The live-node rig (`cstep_node` and `rig` fixtures) lives in node_rig.py.
 pytest_plugins = ("node_rig",)

@@ -9,7 +9,7 @@ import time
 
 import pytest
 import yaml
-from conftest import DISCOVERY_TIMEOUT_S, REPO
+from conftest import DISCOVERY_TIMEOUT_S, REPO, other_test_domain
 from node_rig import corridor_scan, cstep_binary, message_to_ordereddict, odometry
 
 
@@ -191,7 +191,7 @@ def test_echo_explains_unknown_types_and_topics_in_one_line(rig, echo):
 def test_echo_listens_on_ros_domain_id_only(cstep_node, ros_domain, echo):
     # The node publishes diagnostics every second on this test's domain: on another domain, echo
     # hears nothing and says so; on this one it hears them.
-    other = dict(os.environ, ROS_DOMAIN_ID=str(1 + (ros_domain + 50) % 100))
+    other = dict(os.environ, ROS_DOMAIN_ID=str(other_test_domain(ros_domain)))
     start = time.monotonic()
     e = echo("/diagnostics", "--timeout", "3", env=other)
     assert e.finish() != 0

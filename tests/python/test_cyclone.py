@@ -28,14 +28,15 @@ What does not work, and is tested as such (``test_an_rmw_cyclonedds_client_gets_
   (``rmw_take_response_request``: ``srcfilter == wrap.header.guid``). The node's server is
   ros2-client's ``Enhanced`` mapping, fixed when it is created: it decodes the header's 16 bytes
   as the start of the odometry (a position of ~1e219 m), answers ``valid = false``, and writes
-  that answer without a header, so the client reads the answer's first 16 bytes (the score's
-  stamp and frame id) as a header that is not its own, and drops it. The request is lost both
-  ways. This is the service incompatibility between rmw_fastrtps and rmw_cyclonedds themselves
-  (ROS 2 services do not cross those two RMWs either). ros2-client does implement the Cyclone
+  that answer without a header. Read in the client's layout, the answer's first 16 bytes (the
+  score's stamp and frame id) become a header that is not the client's, and the rest, read 16
+  bytes off, does not even decode: the client takes nothing. The call is lost both ways. The two layouts are rmw_fastrtps's and rmw_cyclonedds's own, so an rmw_fastrtps server
+  meets the same mismatch with an rmw_cyclonedds client. ros2-client does implement the Cyclone
   layout (``ServiceMapping::Cyclone``), but one server speaks one mapping; answering both would
-  take a server that picks the mapping per request (a request with
-  ``PID_RELATED_SAMPLE_IDENTITY`` is Enhanced, one without carries the Cyclone header), which
-  ros2-client 0.12.1 does not offer.
+  take a server that picks the mapping per request, which ros2-client 0.12.1 does not offer (a
+  request with ``PID_RELATED_SAMPLE_IDENTITY`` is Enhanced; one without most likely carries the
+  Cyclone header, though a bare Cyclone participant like the one in
+  ``test_cyclone_calls_evaluate_in_the_fast_dds_layout`` sends neither).
 """
 
 import dataclasses

@@ -9,17 +9,16 @@ PyPI wheel), with rclpy and the pure-Python ``rosbags`` package.
     python -m cstep_bridge.bag compare live.mcap_dir replayed  # exit 0: the same scores
 
 ``record`` subscribes to the node's inputs (``odom``, ``scan``, ``goal_pose``) and outputs
-(``cstep/empowerment``, ``cstep/reward``), relative names resolved in ``--namespace``, and
-stores each message as it arrived (its CDR bytes, stamped with the receive time), with the
+(``cstep/empowerment``, ``cstep/reward``) of a node in the root namespace, and stores each message as it arrived (its CDR bytes, stamped with the receive time), with the
 cstep_msgs definitions. ``replay`` publishes the recorded inputs, bytes and stamps unchanged,
 at the recorded pace (``--rate``), and records what the node answers. ``compare`` matches the
 scores of two bags by their stamp (the scan's) and reports any field that differs.
 
-The node scores a scan against the newest odometry *received* when the scan arrives (not the
-one nearest in stamp), skips a scan replaced before it was scored, and calls odometry stale by
-wall-clock age; so a replay gets the same scores when the inputs arrive in the same order with
-the same gaps as live: at the recorded pace, with odometry and scans further apart than the
-delivery jitter. The node must run with the same parameters (``seed``, the sampler, the model,
+The node scores a scan against the newest odometry it holds when it starts scoring that scan
+(not the one nearest in stamp), skips a scan replaced before it was scored, and calls odometry
+stale by wall-clock age; so a replay gets the same scores when the inputs arrive in the same
+order with the same gaps as live, and each scan is scored before the next odometry arrives: at
+the recorded pace, with gaps wider than the delivery jitter and the scoring time. The node must run with the same parameters (``seed``, the sampler, the model,
 ``safety_coefficient``: each score carries its ``c``). See the README's "Record and replay".
 """
 
@@ -44,6 +43,10 @@ OUTPUTS = {
     "cstep/reward": "cstep_msgs/msg/EmpoweredReward",
 }
 """The node's score topics (default names, relative) and their types."""
+
+SETTLE_S = 1.0
+"""Seconds ``replay`` waits after its endpoints matched the node's, for the node to match
+ours (discovery is not symmetric in time), before the first message."""
 
 MATCH_TIMEOUT_S = 60.0
 """How long ``replay`` waits for a node to subscribe (and publish scores, with ``--record``)."""
@@ -124,9 +127,9 @@ class Recording:
         return ", ".join(f"{topic}: {n}" for topic, n in self.counts.items())
 
 
-def ros_node(namespace: str):
+def ros_node():
     """An rclpy context (without rclpy's signal handlers: Ctrl-C raises KeyboardInterrupt here)
-    and a node in ``namespace``, on the environment's domain and discovery range."""
+    and a node, on the environment's domain and discovery range."""
     import rclpy
     from rclpy.context import Context
     from rclpy.executors import SingleThreadedExecutor
@@ -135,15 +138,15 @@ def ros_node(namespace: str):
 
     context = Context()
     rclpy.init(context=context, signal_handler_options=SignalHandlerOptions.NO)
-    node = Node("cstep_bag", namespace=namespace, context=context)
+    node = Node("cstep_bag", context=context)
     executor = SingleThreadedExecutor(context=context)
     executor.add_node(node)
     return context, node, executor
 
 
-def record(path: Path, namespace: str, duration: float | None) -> int:
+def record(path: Path, duration: float | None) -> int:
     """``record``: the inputs and scores into ``path`` until Ctrl-C or ``duration`` seconds."""
-    context, node, executor = ros_node(namespace)
+    context, node, executor = ros_node()
     recording = Recording(node, path, INPUTS | OUTPUTS, typestore())
     print(f"recording {', '.join(recording.counts)} into {path}", flush=True)
     end = time.monotonic() + duration if duration is not None else None
@@ -177,10 +180,10 @@ class Replay:
             return cls(messages, {c.topic: c.msgtype for c in inputs if c.topic in played})
 
 
-def replay(path: Path, namespace: str, out: Path | None, rate: float, delay: float) -> int:
+def replay(path: Path, out: Path | None, rate: float) -> int:
     """``replay``: publish the recorded inputs of ``path`` (on their recorded topics) at
     ``rate`` times the recorded pace, once every node subscribed to them has matched, then
-    ``delay`` s more (for the node to match our score readers: discovery is not symmetric in
+    SETTLE_S more (for the node to match our score readers: discovery is not symmetric in
     time); record the scores into ``out`` if given."""
     from rclpy.qos import QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
 
@@ -188,7 +191,7 @@ def replay(path: Path, namespace: str, out: Path | None, rate: float, delay: flo
     if not inputs.messages:
         print(f"cstep_bridge.bag: {path} holds no odom, scan or goal_pose message", file=sys.stderr)
         return 1
-    context, node, executor = ros_node(namespace)
+    context, node, executor = ros_node()
     recording = Recording(node, out, OUTPUTS, typestore()) if out else None
     publishers = {
         topic: node.create_publisher(
@@ -210,12 +213,12 @@ def replay(path: Path, namespace: str, out: Path | None, rate: float, delay: flo
                 print(
                     f"cstep_bridge.bag: no node subscribed to {', '.join(sorted(publishers))}"
                     + (f" and publishing {', '.join(OUTPUTS)}" if recording else "")
-                    + f" within {MATCH_TIMEOUT_S:.0f} s (same ROS_DOMAIN_ID? same --namespace?)",
+                    + f" within {MATCH_TIMEOUT_S:.0f} s (same ROS_DOMAIN_ID?)",
                     file=sys.stderr,
                 )
                 return 1
             executor.spin_once(timeout_sec=0.05)
-        spin_for(executor, delay)
+        spin_for(executor, SETTLE_S)
         first = inputs.messages[0][0]
         start = time.monotonic()
         for stamp, topic, data in inputs.messages:
@@ -295,21 +298,16 @@ def main(argv: list[str] | None = None) -> int:
     play.add_argument("bag", type=Path, help="a bag made by record")
     play.add_argument("--record", type=Path, help="record the node's scores into this bag")
     play.add_argument("--rate", type=float, default=1.0, help="pace factor (default 1)")
-    play.add_argument(
-        "--delay", type=float, default=1.0, help="seconds between matching and the first message"
-    )
     cmp = commands.add_parser("compare", help="compare the scores of two bags")
     cmp.add_argument("first", type=Path)
     cmp.add_argument("second", type=Path)
-    for sub in (rec, play):
-        sub.add_argument("--namespace", default="/", help="resolves the relative topic names")
     args = parser.parse_args(argv)
     if args.command == "record":
-        return record(args.bag, args.namespace, args.duration)
+        return record(args.bag, args.duration)
     if args.command == "replay":
         if not args.rate > 0:
             parser.error(f"--rate must be > 0, got {args.rate}")
-        return replay(args.bag, args.namespace, args.record, args.rate, args.delay)
+        return replay(args.bag, args.record, args.rate)
     return compare(args.first, args.second)
 
 

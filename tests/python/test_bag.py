@@ -1,0 +1,188 @@
+"""Record and replay (``python -m cstep_bridge.bag``): a live node's inputs and scores go to an
+MCAP bag; replayed to a fresh node, the inputs get the very same scores (the estimator reuses
+one control sample per seed), as ``bag compare`` and the bags themselves show."""
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+from conftest import DISCOVERY_TIMEOUT_S, REPO, other_test_domain, wait_until
+from cstep_bridge.bag import OUTPUTS, compare, scores, typestore
+from node_rig import CONFIG, corridor_scan, cstep_binary, odometry, stop_gently
+
+# States that score differently (corridor width m, forward speed m/s): scan k is stamped 3000 + k.
+STATES = [(2.5, 0.5), (1.6, 1.0), (4.0, 0.0), (2.0, -0.8), (3.0, 1.5), (1.8, 0.2)]
+FIRST = 3000
+
+
+def bag_command(*args: str, domain: int | None = None) -> subprocess.Popen:
+    """``python -m cstep_bridge.bag args`` from this checkout, on this test's domain or
+    ``domain``; the caller ends it."""
+    env = dict(os.environ, PYTHONPATH=str(REPO / "py_bridge"))
+    if domain is not None:
+        env["ROS_DOMAIN_ID"] = str(domain)
+    return subprocess.Popen(
+        [sys.executable, "-m", "cstep_bridge.bag", *args],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+        env=env,
+        cwd=REPO,
+    )
+
+
+def finish(proc: subprocess.Popen, interrupt: bool = False) -> tuple[int, str]:
+    """Ctrl-C (if ``interrupt``), then the exit code and output of ``proc``; killed by its PID
+    (exit code None) if it has not ended 60 s later."""
+    if interrupt:
+        proc.send_signal(signal.SIGINT)
+    try:
+        out, _ = proc.communicate(timeout=60)
+    except subprocess.TimeoutExpired:
+        proc.kill()
+        out, _ = proc.communicate(timeout=10)
+    return proc.returncode, out
+
+
+def feed_in_lockstep(rig) -> None:
+    """A lead-in of state 0 (stamps below FIRST: it lets late matches settle, in the live run
+    and in the replay), then each state alone: its odometry, 150 ms later its scan, then a pause
+    once its score is in (the scan again if the best-effort scan was lost)."""
+    for k in range(10):
+        rig.odom.publish(odometry(vx=STATES[0][1]))
+        rig.scan.publish(corridor_scan(FIRST - 10 + k, width=STATES[0][0]))
+        rig.spin_for(0.1)
+    for k, (width, speed) in enumerate(STATES):
+        stamp = FIRST + k
+        rig.odom.publish(odometry(vx=speed))
+        rig.spin_for(0.15)
+        deadline = time.monotonic() + DISCOVERY_TIMEOUT_S
+        while not any(r.header.stamp.sec == stamp for r in rig.reward):
+            if time.monotonic() > deadline:
+                pytest.fail(f"no score for the scan stamped {stamp}")
+            rig.scan.publish(corridor_scan(stamp, width=width))
+            rig.spin_for(0.5)
+        rig.spin_for(0.2)
+
+
+def test_a_recorded_run_replayed_to_a_fresh_node_gets_the_same_scores(
+    rig, cstep_node, ros_domain, tmp_path
+):
+    live, replayed = tmp_path / "live", tmp_path / "replayed"
+    recorder = bag_command("record", str(live))
+    try:
+        # The recorder is in the graph on every topic before anything is fed.
+        wait_until(
+            lambda: (
+                rig.odom.get_subscription_count() >= 2
+                and rig.scan.get_subscription_count() >= 2
+                and rig.node.count_subscribers("/cstep/empowerment") >= 2
+                and rig.node.count_subscribers("/cstep/reward") >= 2
+            ),
+            "the recorder's subscriptions",
+            rig.executor,
+        )
+        feed_in_lockstep(rig)
+        rig.spin_for(1.0)  # the last scores reach the recorder
+    finally:
+        code, summary = finish(recorder, interrupt=True)
+    assert code == 0 and "recorded odom:" in summary, summary
+    assert list(live.glob("*.mcap")), f"no MCAP file in {sorted(live.iterdir())}"
+    recorded = scores(live)
+    lockstep = [
+        (kind, FIRST + k, 0) for k in range(len(STATES)) for kind in ("empowerment", "reward")
+    ]
+    assert set(lockstep) <= recorded.keys(), f"recorded scores: {sorted(recorded)}"
+    live_by_stamp = {r.header.stamp.sec: r.reward for r in rig.reward}
+    for k in range(len(STATES)):  # the bag holds what the node sent
+        assert recorded[("reward", FIRST + k, 0)]["reward"] == live_by_stamp[FIRST + k]
+    distinct = {recorded[("empowerment", FIRST + k, 0)]["empowerment"] for k in range(len(STATES))}
+    assert len(distinct) == len(STATES), "the states scored alike: the comparison proves little"
+
+    # A fresh node on a domain of its own: only the replay talks to it.
+    stop_gently(cstep_node)
+    domain = other_test_domain(ros_domain)
+    log = tmp_path / "fresh-node.log"
+    with open(log, "w") as out:
+        fresh = subprocess.Popen(
+            [str(cstep_binary()), "node", "--config", str(CONFIG)],
+            stdout=out,
+            stderr=subprocess.STDOUT,
+            env=dict(os.environ, ROS_DOMAIN_ID=str(domain)),
+            cwd=REPO,
+        )
+    try:
+        player = bag_command("replay", str(live), "--record", str(replayed), domain=domain)
+        code, played = finish(player)
+    finally:
+        stop_gently(fresh)
+    assert code == 0 and "replayed" in played, played + log.read_text()
+
+    again = scores(replayed)
+    for stamp in lockstep:
+        assert stamp in again, f"not scored in the replay: {stamp}\n{played}{log.read_text()}"
+        assert again[stamp] == recorded[stamp], stamp
+    comparison = subprocess.run(
+        [sys.executable, "-m", "cstep_bridge.bag", "compare", str(live), str(replayed)],
+        capture_output=True,
+        text=True,
+        env=dict(os.environ, PYTHONPATH=str(REPO / "py_bridge")),
+        timeout=60,
+        check=False,
+    )
+    assert comparison.returncode == 0, comparison.stdout + comparison.stderr
+    assert " 0 differ;" in comparison.stdout, comparison.stdout
+
+
+def write_scores(path: Path, scored: dict[int, float]) -> None:
+    """A bag with one score and reward per stamp (seconds) of ``scored``, of that empowerment."""
+    from rosbags.rosbag2 import StoragePlugin, Writer
+
+    store = typestore()
+    kinds = store.types
+    with Writer(path, version=9, storage_plugin=StoragePlugin.MCAP) as writer:
+        empowerment = writer.add_connection(
+            "/cstep/empowerment", OUTPUTS["cstep/empowerment"], typestore=store
+        )
+        reward = writer.add_connection("/cstep/reward", OUTPUTS["cstep/reward"], typestore=store)
+        for sec, value in scored.items():
+            header = kinds["std_msgs/msg/Header"](
+                stamp=kinds["builtin_interfaces/msg/Time"](sec=sec, nanosec=0), frame_id="odom"
+            )
+            e = kinds["cstep_msgs/msg/Empowerment"](
+                header, value, 1.0, 0.5, 0.5, 1.0, 1.0, 150, 3, True, "ok"
+            )
+            r = kinds["cstep_msgs/msg/EmpoweredReward"](header, value, 1.0, value, 1.0, True)
+            writer.write(empowerment, sec, store.serialize_cdr(e, e.__msgtype__))
+            writer.write(reward, sec, store.serialize_cdr(r, r.__msgtype__))
+
+
+def test_compare_names_a_changed_score_and_needs_scores_in_common(tmp_path, capsys):
+    write_scores(tmp_path / "a", {1: 2.5, 2: 1.25})
+    write_scores(tmp_path / "b", {1: 2.5, 2: 1.5})
+    write_scores(tmp_path / "c", {7: 2.5})
+    assert compare(tmp_path / "a", tmp_path / "a") == 0
+    capsys.readouterr()
+    assert compare(tmp_path / "a", tmp_path / "b") == 1
+    out = capsys.readouterr().out
+    assert "2.000000000 empowerment.empowerment: 1.25 != 1.5" in out, out
+    assert "2.000000000 reward.reward: 1.25 != 1.5" in out, out
+    assert "4 score messages in both bags, 2 identical, 2 differ" in out, out
+    assert compare(tmp_path / "a", tmp_path / "c") == 1, "nothing compared is no success"
+
+
+def test_record_for_a_duration_and_replay_refuses_a_bag_without_inputs(tmp_path):
+    """No node on this domain: ``record --duration`` ends by itself with an empty bag, which
+    ``replay`` refuses with one line; a pace of 0 is refused before anything starts."""
+    empty = tmp_path / "empty"
+    code, out = finish(bag_command("record", str(empty), "--duration", "1"))
+    assert code == 0, out
+    assert "recorded odom: 0, scan: 0, goal_pose: 0, cstep/empowerment: 0, cstep/reward: 0" in out
+    code, out = finish(bag_command("replay", str(empty)))
+    assert code == 1 and "holds no odom, scan or goal_pose message" in out, out
+    code, out = finish(bag_command("replay", str(empty), "--rate", "0"))
+    assert code == 2 and "--rate must be > 0, got 0.0" in out, out

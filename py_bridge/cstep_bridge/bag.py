@@ -30,6 +30,7 @@ import argparse
 import importlib
 import sys
 import time
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -55,6 +56,49 @@ MATCH_TIMEOUT_S = 60.0
 
 CSTEP_MESSAGES = ("Empowerment", "EmpoweredReward")
 """cstep_msgs's messages, registered with rosbags from their .msg files."""
+
+
+class BagError(Exception):
+    """A bag that cannot be read or written as asked: :func:`main` prints it as one line."""
+
+
+def new_bag(path: Path) -> Path:
+    """``path``, which must not exist yet (rosbags creates bags, never overwrites them)."""
+    if path.exists():
+        raise BagError(f"{path} exists already: record into a new bag")
+    return path
+
+
+@contextmanager
+def open_bag(path: Path):
+    """An open rosbags reader of the bag at ``path``, closed on leaving the ``with``."""
+    from rosbags.rosbag2 import Reader, ReaderError
+
+    if not path.exists():
+        raise BagError(f"no bag at {path}")
+    if path.is_dir() and not (path / "metadata.yaml").is_file():
+        raise BagError(
+            f"{path} has no metadata.yaml: not a bag, or a recording that did not end cleanly"
+        )
+    try:
+        reader = Reader(path)
+        reader.open()
+    except ReaderError as err:
+        raise BagError(f"cannot read {path}: {err}") from err
+    try:
+        yield reader
+    except ReaderError as err:
+        raise BagError(f"cannot read {path}: {err}") from err
+    finally:
+        reader.close()
+
+
+def messages_of(reader, msgtypes):
+    """The messages (connection, time ns, CDR bytes) of ``reader`` on topics of ``msgtypes``,
+    in time order; none when it has no such topic (rosbags reads every topic when asked for
+    none)."""
+    connections = [c for c in reader.connections if c.msgtype in msgtypes]
+    return reader.messages(connections=connections) if connections else iter(())
 
 
 def typestore():
@@ -148,6 +192,7 @@ def ros_node():
 
 def record(path: Path, duration: float | None) -> int:
     """``record``: the inputs and scores into ``path`` until Ctrl-C or ``duration`` seconds."""
+    new_bag(path)
     context, node, executor = ros_node()
     recording = Recording(node, path, INPUTS | OUTPUTS, typestore())
     print(f"recording {', '.join(recording.counts)} into {path}", flush=True)
@@ -173,13 +218,13 @@ class Replay:
 
     @classmethod
     def read(cls, path: Path) -> Replay:
-        from rosbags.rosbag2 import Reader
-
-        with Reader(path) as reader:
-            inputs = [c for c in reader.connections if c.msgtype in INPUTS.values()]
-            messages = [(t, c.topic, bytes(d)) for c, t, d in reader.messages(connections=inputs)]
-            played = {topic for _, topic, _ in messages}
-            return cls(messages, {c.topic: c.msgtype for c in inputs if c.topic in played})
+        with open_bag(path) as reader:
+            found = list(messages_of(reader, INPUTS.values()))
+        if not found:
+            raise BagError(f"{path} holds no odom, scan or goal_pose message")
+        return cls(
+            [(t, c.topic, bytes(d)) for c, t, d in found], {c.topic: c.msgtype for c, _, _ in found}
+        )
 
 
 def replay(path: Path, out: Path | None, rate: float) -> int:
@@ -190,9 +235,8 @@ def replay(path: Path, out: Path | None, rate: float) -> int:
     from rclpy.qos import QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
 
     inputs = Replay.read(path)
-    if not inputs.messages:
-        print(f"cstep_bridge.bag: {path} holds no odom, scan or goal_pose message", file=sys.stderr)
-        return 1
+    if out:
+        new_bag(out)
     context, node, executor = ros_node()
     recording = Recording(node, out, OUTPUTS, typestore()) if out else None
     publishers = {
@@ -247,13 +291,10 @@ def spin_for(executor, seconds: float) -> None:
 def scores(path: Path) -> dict[tuple[str, int, int], dict[str, object]]:
     """The score messages in a bag by kind (``empowerment``, ``reward``) and the stamp of the
     scan they score (seconds, nanoseconds): each message's fields but its stamp, by name."""
-    from rosbags.rosbag2 import Reader
-
     store = typestore()
     found: dict[tuple[str, int, int], dict[str, object]] = {}
-    with Reader(path) as reader:
-        connections = [c for c in reader.connections if c.msgtype in OUTPUTS.values()]
-        for connection, _, data in reader.messages(connections=connections):
+    with open_bag(path) as reader:
+        for connection, _, data in messages_of(reader, OUTPUTS.values()):
             message = store.deserialize_cdr(data, connection.msgtype)
             kind = "reward" if connection.msgtype == OUTPUTS["cstep/reward"] else "empowerment"
             stamp = message.header.stamp
@@ -264,6 +305,8 @@ def scores(path: Path) -> dict[tuple[str, int, int], dict[str, object]]:
                 if name not in ("header", "__msgtype__")
             )
             found[(kind, stamp.sec, stamp.nanosec)] = fields
+    if not found:
+        raise BagError(f"{path} holds no cstep/empowerment or cstep/reward message")
     return found
 
 
@@ -304,13 +347,17 @@ def main(argv: list[str] | None = None) -> int:
     cmp.add_argument("first", type=Path)
     cmp.add_argument("second", type=Path)
     args = parser.parse_args(argv)
-    if args.command == "record":
-        return record(args.bag, args.duration)
-    if args.command == "replay":
-        if not args.rate > 0:
-            parser.error(f"--rate must be > 0, got {args.rate}")
-        return replay(args.bag, args.record, args.rate)
-    return compare(args.first, args.second)
+    if args.command == "replay" and not args.rate > 0:
+        parser.error(f"--rate must be > 0, got {args.rate}")
+    try:
+        if args.command == "record":
+            return record(args.bag, args.duration)
+        if args.command == "replay":
+            return replay(args.bag, args.record, args.rate)
+        return compare(args.first, args.second)
+    except BagError as err:
+        print(f"cstep_bridge.bag: {err}", file=sys.stderr)
+        return 1
 
 
 if __name__ == "__main__":

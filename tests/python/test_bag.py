@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 from conftest import DISCOVERY_TIMEOUT_S, REPO, other_test_domain, wait_until
-from cstep_bridge.bag import OUTPUTS, compare, scores, typestore
+from cstep_bridge.bag import INPUTS, OUTPUTS, compare, main, scores, typestore
 from node_rig import CONFIG, corridor_scan, cstep_binary, odometry, stop_gently
 
 # States that score differently (corridor width m, forward speed m/s): scan k is stamped 3000 + k.
@@ -186,3 +186,51 @@ def test_record_for_a_duration_and_replay_refuses_a_bag_without_inputs(tmp_path)
     assert code == 1 and "holds no odom, scan or goal_pose message" in out, out
     code, out = finish(bag_command("replay", str(empty), "--rate", "0"))
     assert code == 2 and "--rate must be > 0, got 0.0" in out, out
+
+
+def write_odometry(path: Path, count: int) -> None:
+    """A bag with ``count`` odometry messages (stamps 1..count s), 0.1 s apart."""
+    from rclpy.serialization import serialize_message
+    from rosbags.rosbag2 import StoragePlugin, Writer
+
+    with Writer(path, version=9, storage_plugin=StoragePlugin.MCAP) as writer:
+        odom = writer.add_connection("/odom", INPUTS["odom"], typestore=typestore())
+        for k in range(1, count + 1):
+            message = odometry(vx=0.1 * k)
+            message.header.stamp.sec = k
+            writer.write(odom, k * 100_000_000, serialize_message(message))
+
+
+def test_a_bag_of_the_wrong_kind_is_refused_with_one_line(tmp_path, capsys):
+    """rosbags reads every topic when asked for none: a bag with no input topic (the scores a
+    replay recorded) must not be replayed as inputs, nor one with no score topic compared."""
+    write_scores(tmp_path / "scores", {1: 2.5})
+    write_odometry(tmp_path / "inputs", 2)
+    assert main(["replay", str(tmp_path / "scores")]) == 1
+    err = capsys.readouterr().err
+    assert f"{tmp_path / 'scores'} holds no odom, scan or goal_pose message" in err, err
+    assert main(["compare", str(tmp_path / "inputs"), str(tmp_path / "inputs")]) == 1
+    err = capsys.readouterr().err
+    assert err.strip() == (
+        f"cstep_bridge.bag: {tmp_path / 'inputs'} holds no cstep/empowerment or cstep/reward "
+        "message"
+    ), err
+
+
+def test_missing_and_existing_bags_are_refused_with_one_line(tmp_path, capsys):
+    """A bag to read that is not there (or is half-written: no metadata.yaml), a bag to write
+    that is: one line each, exit 1, before any ROS node starts."""
+    write_odometry(tmp_path / "inputs", 1)
+    half = tmp_path / "half"
+    half.mkdir()
+    for argv, says in [
+        (["compare", str(tmp_path / "nothing"), str(tmp_path / "inputs")], "nothing"),
+        (["replay", str(tmp_path / "nothing")], "nothing"),
+        (["replay", str(half)], "metadata.yaml"),
+        (["record", str(tmp_path / "inputs")], "exists already"),
+        (["replay", str(tmp_path / "inputs"), "--record", str(tmp_path / "inputs")], "exists"),
+    ]:
+        assert main(argv) == 1, argv
+        err = capsys.readouterr().err.strip()
+        assert err.startswith("cstep_bridge.bag: ") and "\n" not in err, (argv, err)
+        assert says in err, (argv, err)

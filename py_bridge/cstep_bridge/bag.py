@@ -10,7 +10,7 @@ PyPI wheel), with rclpy and the pure-Python ``rosbags`` package.
 
 ``record`` subscribes to the inputs (``odom``, ``scan``, ``goal_pose``) and outputs
 (``cstep/empowerment``, ``cstep/reward``) of a node in the root namespace, and stores each
-message as it arrived (its CDR bytes, stamped with the receive time), with the cstep_msgs
+message as it arrived (its CDR bytes, stamped with the time DDS received it), with the cstep_msgs
 definitions. ``replay`` publishes the recorded inputs, bytes and stamps unchanged, at the
 recorded pace (``--rate``), and records what the node answers. ``compare`` matches the scores
 of two bags by their stamp (the scan's) and reports any field that differs.
@@ -126,14 +126,23 @@ def message_class(msgtype: str):
     return getattr(importlib.import_module(f"{package}.msg"), name)
 
 
-def qos(topic: str):
-    """Inputs: best effort (matches sensor-data and reliable publishers alike); scores:
-    reliable, as the node publishes them."""
-    from rclpy.qos import QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
+RECORDER_QUEUE = 1000
+"""Messages per topic a recorder's subscription holds while the recorder is behind (writing the
+bag, or starved of CPU) before the oldest are dropped."""
 
-    if topic in INPUTS:
-        return qos_profile_sensor_data
-    return QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE)
+
+def recorder_qos(topic: str):
+    """Inputs: best effort (matches sensor-data and reliable publishers alike); scores:
+    reliable, as the node publishes them; either way a queue of RECORDER_QUEUE."""
+    from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+
+    return QoSProfile(
+        depth=RECORDER_QUEUE,
+        reliability=ReliabilityPolicy.BEST_EFFORT
+        if topic in INPUTS
+        else ReliabilityPolicy.RELIABLE,
+        durability=DurabilityPolicy.VOLATILE,
+    )
 
 
 class Recording:
@@ -155,14 +164,16 @@ class Recording:
                     message_class(msgtype),
                     name,
                     self._writes(topic, connection),
-                    qos(topic),
+                    recorder_qos(topic),
                     raw=True,
                 )
             )
 
     def _writes(self, topic: str, connection):
-        def write(data: bytes) -> None:
-            self.writer.write(connection, time.time_ns(), data)
+        def write(data: bytes, info) -> None:
+            # Stamped when DDS received it, not when this thread got to it: replay paces and
+            # orders the messages by these stamps.
+            self.writer.write(connection, info["received_timestamp"] or time.time_ns(), data)
             self.counts[topic] += 1
 
         return write

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 from conftest import DISCOVERY_TIMEOUT_S, REPO, other_test_domain, wait_until
-from cstep_bridge.bag import INPUTS, OUTPUTS, compare, main, scores, typestore
+from cstep_bridge.bag import INPUTS, OUTPUTS, Recording, compare, main, scores, typestore
 from node_rig import CONFIG, corridor_scan, cstep_binary, odometry, stop_gently
 
 # States that score differently (corridor width m, forward speed m/s): scan k is stamped 3000 + k.
@@ -234,3 +234,39 @@ def test_missing_and_existing_bags_are_refused_with_one_line(tmp_path, capsys):
         err = capsys.readouterr().err.strip()
         assert err.startswith("cstep_bridge.bag: ") and "\n" not in err, (argv, err)
         assert says in err, (argv, err)
+
+
+def test_a_recorder_that_falls_behind_keeps_every_message_and_its_arrival_time(
+    ros_context, executor, tmp_path
+):
+    """The recorder does not spin while 30 odometry messages arrive 20 ms apart: all 30 are in
+    the bag (none dropped from a short queue), each stamped when it arrived, not when the
+    recorder got to it (replay paces and orders by these stamps)."""
+    from rclpy.node import Node
+    from rclpy.qos import QoSProfile, ReliabilityPolicy
+    from rosbags.rosbag2 import Reader
+
+    node = Node("cstep_bag_test", context=ros_context)
+    executor.add_node(node)
+    recording = Recording(node, tmp_path / "bag", {"odom": INPUTS["odom"]}, typestore())
+    publisher = node.create_publisher(
+        type(odometry()), "odom", QoSProfile(depth=50, reliability=ReliabilityPolicy.RELIABLE)
+    )
+    wait_until(lambda: publisher.get_subscription_count() >= 1, "the recorder", executor)
+    sent = []
+    for k in range(30):
+        message = odometry()
+        message.header.stamp.sec = k
+        sent.append(time.time_ns())
+        publisher.publish(message)
+        time.sleep(0.02)
+    time.sleep(0.5)  # delivered, not yet taken
+    caught_up = time.time_ns()
+    wait_until(lambda: recording.counts["odom"] >= 30, "30 recorded", executor, timeout=5)
+    recording.close()
+    with Reader(tmp_path / "bag") as reader:
+        stamps = [t for _, t, _ in reader.messages()]
+    assert len(stamps) == 30
+    assert all(a <= b for a, b in zip(sent, stamps)), "recorded before it was sent?"
+    late = [k for k, t in enumerate(stamps) if t >= caught_up]
+    assert not late, f"messages {late} stamped when the recorder took them, not on arrival"

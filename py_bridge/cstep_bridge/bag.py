@@ -58,6 +58,11 @@ CSTEP_MESSAGES = ("Empowerment", "EmpoweredReward")
 """cstep_msgs's messages, registered with rosbags from their .msg files."""
 
 
+INTERRUPTED = 130
+"""The exit code of a command that Ctrl-C cut short (as a shell reports SIGINT), but for
+``record``, which Ctrl-C ends normally."""
+
+
 class BagError(Exception):
     """A bag that cannot be read or written as asked: :func:`main` prints it as one line."""
 
@@ -114,7 +119,7 @@ def typestore():
     for name in CSTEP_MESSAGES:
         path = share / f"{name}.msg"
         if not path.is_file():
-            raise FileNotFoundError(f"no definition of cstep_msgs/msg/{name}: {path} is missing")
+            raise BagError(f"no definition of cstep_msgs/msg/{name}: {path} is missing")
         types.update(get_types_from_msg(path.read_text(), f"cstep_msgs/msg/{name}"))
     store.register(types)
     return store
@@ -204,17 +209,20 @@ def ros_node():
 def record(path: Path, duration: float | None) -> int:
     """``record``: the inputs and scores into ``path`` until Ctrl-C or ``duration`` seconds."""
     new_bag(path)
+    store = typestore()
     context, node, executor = ros_node()
-    recording = Recording(node, path, INPUTS | OUTPUTS, typestore())
-    print(f"recording {', '.join(recording.counts)} into {path}", flush=True)
-    end = time.monotonic() + duration if duration is not None else None
+    recording = None
     try:
+        recording = Recording(node, path, INPUTS | OUTPUTS, store)
+        print(f"recording {', '.join(recording.counts)} into {path}", flush=True)
+        end = time.monotonic() + duration if duration is not None else None
         while end is None or time.monotonic() < end:
             executor.spin_once(timeout_sec=0.05)
     except KeyboardInterrupt:
-        pass
+        pass  # Ctrl-C is how a recording ends
     finally:
-        print(f"recorded {recording.close()}", flush=True)
+        if recording:
+            print(f"recorded {recording.close()}", flush=True)
         context.try_shutdown()
     return 0
 
@@ -246,10 +254,12 @@ def replay(path: Path, out: Path | None, rate: float) -> int:
     from rclpy.qos import QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
 
     inputs = Replay.read(path)
+    store = typestore()
     if out:
         new_bag(out)
     context, node, executor = ros_node()
-    recording = Recording(node, out, OUTPUTS, typestore()) if out else None
+    recording = Recording(node, out, OUTPUTS, store) if out else None
+    sent = 0
     publishers = {
         topic: node.create_publisher(
             message_class(msgtype),
@@ -282,7 +292,8 @@ def replay(path: Path, out: Path | None, rate: float) -> int:
             while (wait := start + (stamp - first) / 1e9 / rate - time.monotonic()) > 0:
                 executor.spin_once(timeout_sec=min(wait, 0.01))
             publishers[topic].publish(data)
-        print(f"replayed {len(inputs.messages)} messages", flush=True)
+            sent += 1
+        print(f"replayed {sent} messages", flush=True)
         spin_for(executor, 2.0)  # the last scores arrive
     except KeyboardInterrupt:
         pass
@@ -290,6 +301,12 @@ def replay(path: Path, out: Path | None, rate: float) -> int:
         if recording:
             print(f"recorded {recording.close()}", flush=True)
         context.try_shutdown()
+    if sent < len(inputs.messages):
+        print(
+            f"cstep_bridge.bag: interrupted after {sent} of {len(inputs.messages)} messages",
+            file=sys.stderr,
+        )
+        return INTERRUPTED
     return 0
 
 
@@ -369,6 +386,9 @@ def main(argv: list[str] | None = None) -> int:
     except BagError as err:
         print(f"cstep_bridge.bag: {err}", file=sys.stderr)
         return 1
+    except KeyboardInterrupt:
+        print("cstep_bridge.bag: interrupted", file=sys.stderr)
+        return INTERRUPTED
 
 
 if __name__ == "__main__":

@@ -267,6 +267,21 @@ def test_a_recorder_that_falls_behind_keeps_every_message_and_its_arrival_time(
     with Reader(tmp_path / "bag") as reader:
         stamps = [t for _, t, _ in reader.messages()]
     assert len(stamps) == 30
-    assert all(a <= b for a, b in zip(sent, stamps)), "recorded before it was sent?"
+    assert all(a <= b for a, b in zip(sent, stamps, strict=True)), "recorded before it was sent?"
     late = [k for k, t in enumerate(stamps) if t >= caught_up]
     assert not late, f"messages {late} stamped when the recorder took them, not on arrival"
+
+
+def test_an_interrupted_replay_says_so_and_fails(tmp_path):
+    """Ctrl-C while replay waits for a node (there is none on this domain): exit 130 and how
+    much went out, not the exit 0 of a finished replay."""
+    write_odometry(tmp_path / "inputs", 3)
+    player = bag_command("replay", str(tmp_path / "inputs"))
+    try:
+        lines = iter(player.stdout.readline, "")
+        assert any(line.startswith("waiting for subscribers to /odom") for line in lines)
+    finally:
+        code, out = finish(player, interrupt=True)
+    assert code == 130, out
+    assert out.strip().endswith("cstep_bridge.bag: interrupted after 0 of 3 messages"), out
+    assert "Traceback" not in out, out

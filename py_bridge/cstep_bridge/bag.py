@@ -4,7 +4,7 @@ PyPI wheel), with rclpy and the pure-Python ``rosbags`` package.
 
 ::
 
-    python -m cstep_bridge.bag record run1                     # until Ctrl-C (or --duration S)
+    python -m cstep_bridge.bag record run1                     # until Ctrl-C, kill or --duration S
     python -m cstep_bridge.bag replay run1 --record run1-replayed  # to a fresh node
     python -m cstep_bridge.bag compare run1 run1-replayed      # exit 0: the same scores
 
@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import signal
 import sys
 import time
 from contextlib import contextmanager
@@ -392,4 +393,7 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
+    # `kill PID` (SIGTERM) ends a command as Ctrl-C does: a recording closes its bag. A command
+    # started in the background by a script never gets Ctrl-C (its shell ignores SIGINT there).
+    signal.signal(signal.SIGTERM, signal.default_int_handler)
     sys.exit(main())

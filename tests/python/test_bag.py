@@ -285,3 +285,23 @@ def test_an_interrupted_replay_says_so_and_fails(tmp_path):
     assert code == 130, out
     assert out.strip().endswith("cstep_bridge.bag: interrupted after 0 of 3 messages"), out
     assert "Traceback" not in out, out
+
+
+def test_a_recorder_stopped_by_sigterm_closes_its_bag(tmp_path):
+    """``kill PID`` (SIGTERM: what a script, a service manager or a timeout sends a recorder
+    started in the background, where Ctrl-C is not delivered) ends a recording as Ctrl-C does:
+    exit 0 and a bag that reads (its metadata written), not one cut off mid-write."""
+    bag = tmp_path / "terminated"
+    recorder = bag_command("record", str(bag))
+    try:
+        lines = iter(recorder.stdout.readline, "")
+        assert any(line.startswith("recording odom") for line in lines)
+        recorder.terminate()
+    finally:
+        code, out = finish(recorder)
+    assert code == 0 and "recorded odom: 0" in out, (code, out)
+    from rosbags.rosbag2 import Reader
+
+    with Reader(bag) as reader:  # no metadata.yaml, or an MCAP without its summary: raises
+        assert len(reader.connections) == len(INPUTS) + len(OUTPUTS)
+        assert not list(reader.messages())

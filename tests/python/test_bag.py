@@ -188,8 +188,8 @@ def test_record_for_a_duration_and_replay_refuses_a_bag_without_inputs(tmp_path)
     assert code == 2 and "--rate must be > 0, got 0.0" in out, out
 
 
-def write_odometry(path: Path, count: int) -> None:
-    """A bag with ``count`` odometry messages (stamps 1..count s), 0.1 s apart."""
+def write_odometry(path: Path, count: int, gap_s: float = 0.1) -> None:
+    """A bag with ``count`` odometry messages (stamps 1..count s), received ``gap_s`` apart."""
     from rclpy.serialization import serialize_message
     from rosbags.rosbag2 import StoragePlugin, Writer
 
@@ -198,7 +198,7 @@ def write_odometry(path: Path, count: int) -> None:
         for k in range(1, count + 1):
             message = odometry(vx=0.1 * k)
             message.header.stamp.sec = k
-            writer.write(odom, k * 100_000_000, serialize_message(message))
+            writer.write(odom, round(k * gap_s * 1e9), serialize_message(message))
 
 
 def test_a_bag_of_the_wrong_kind_is_refused_with_one_line(tmp_path, capsys):
@@ -305,3 +305,32 @@ def test_a_recorder_stopped_by_sigterm_closes_its_bag(tmp_path):
     with Reader(bag) as reader:  # no metadata.yaml, or an MCAP without its summary: raises
         assert len(reader.connections) == len(INPUTS) + len(OUTPUTS)
         assert not list(reader.messages())
+
+
+def test_replay_keeps_the_recorded_gaps_scaled_by_rate(ros_context, executor, tmp_path):
+    """Five odometry messages recorded 1 s apart, replayed at ``--rate 4`` to a subscriber of
+    this test: all arrive, in order, over about 1 s (4 s at the recorded pace)."""
+    from nav_msgs.msg import Odometry
+    from rclpy.node import Node
+    from rclpy.qos import QoSProfile, ReliabilityPolicy
+
+    write_odometry(tmp_path / "inputs", 5, gap_s=1.0)
+    node = Node("cstep_bag_test", context=ros_context)
+    executor.add_node(node)
+    arrivals = []
+    node.create_subscription(
+        Odometry,
+        "odom",
+        lambda message, info: arrivals.append((message.header.stamp.sec, info)),
+        QoSProfile(depth=50, reliability=ReliabilityPolicy.RELIABLE),
+    )
+    player = bag_command("replay", str(tmp_path / "inputs"), "--rate", "4")
+    try:
+        wait_until(lambda: len(arrivals) >= 5, "five replayed messages", executor, timeout=60)
+    finally:
+        code, out = finish(player)
+    assert code == 0 and "replayed 5 messages" in out, out
+    assert [sec for sec, _ in arrivals] == [1, 2, 3, 4, 5]
+    received = [info["received_timestamp"] for _, info in arrivals]
+    span = (received[-1] - received[0]) / 1e9
+    assert 0.6 < span < 2.5, f"5 messages 1 s apart at rate 4 took {span:.2f} s"

@@ -317,11 +317,12 @@ def spin_for(executor, seconds: float) -> None:
         executor.spin_once(timeout_sec=0.01)
 
 
-def scores(path: Path) -> dict[tuple[str, int, int], dict[str, object]]:
+def scores(path: Path) -> dict[tuple[str, int, int], list[dict[str, object]]]:
     """The score messages in a bag by kind (``empowerment``, ``reward``) and the stamp of the
-    scan they score (seconds, nanoseconds): each message's fields but its stamp, by name."""
+    scan they score (seconds, nanoseconds): the distinct scores of that scan, in bag order (a
+    scan that came twice may be scored twice), each its fields but the stamp, by name."""
     store = typestore()
-    found: dict[tuple[str, int, int], dict[str, object]] = {}
+    found: dict[tuple[str, int, int], list[dict[str, object]]] = {}
     with open_bag(path) as reader:
         for connection, _, data in messages_of(reader, OUTPUTS.values()):
             message = store.deserialize_cdr(data, connection.msgtype)
@@ -333,7 +334,9 @@ def scores(path: Path) -> dict[tuple[str, int, int], dict[str, object]]:
                 for name in message.__dataclass_fields__
                 if name not in ("header", "__msgtype__")
             )
-            found[(kind, stamp.sec, stamp.nanosec)] = fields
+            scored = found.setdefault((kind, stamp.sec, stamp.nanosec), [])
+            if fields not in scored:
+                scored.append(fields)
     if not found:
         raise BagError(f"{path} holds no cstep/empowerment or cstep/reward message")
     return found
@@ -341,17 +344,25 @@ def scores(path: Path) -> dict[tuple[str, int, int], dict[str, object]]:
 
 def compare(first: Path, second: Path) -> int:
     """``compare``: 0 when the two bags share at least one score message and every shared one
-    is identical, field for field; 1 otherwise. Prints each field that differs, and a summary
+    is identical, field for field; 1 otherwise. Prints each field that differs (or, for a scan
+    scored differently more than once, how many scores each bag has of it), and a summary
     (messages in one bag only, such as scans the node skipped in one run, are counted)."""
     a, b = scores(first), scores(second)
     shared = sorted(a.keys() & b.keys())
     differ = 0
     for key in shared:
         kind, sec, nanosec = key
-        changed = [f for f in a[key] if a[key][f] != b[key].get(f)]
+        at = f"{sec}.{nanosec:09d} {kind}"
+        if len(a[key]) == len(b[key]) == 1:
+            x, y = a[key][0], b[key][0]
+            changed = [f for f in x if x[f] != y.get(f)]
+            for f in changed:
+                print(f"{at}.{f}: {x[f]!r} != {y.get(f)!r}")
+        else:
+            changed = any(s not in b[key] for s in a[key]) or any(s not in a[key] for s in b[key])
+            if changed:
+                print(f"{at}: {len(a[key])} different scores in {first}, {len(b[key])} in {second}")
         differ += bool(changed)
-        for f in changed:
-            print(f"{sec}.{nanosec:09d} {kind}.{f}: {a[key][f]!r} != {b[key].get(f)!r}")
     print(
         f"{len(shared)} score messages in both bags, {len(shared) - differ} identical, "
         f"{differ} differ; {len(a.keys() - b.keys())} only in {first}, "

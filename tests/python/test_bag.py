@@ -99,8 +99,11 @@ def test_a_recorded_run_replayed_to_a_fresh_node_gets_the_same_scores(
     assert set(lockstep) <= recorded.keys(), f"recorded scores: {sorted(recorded)}"
     live_by_stamp = {r.header.stamp.sec: r.reward for r in rig.reward}
     for k in range(len(STATES)):  # the bag holds what the node sent
-        assert recorded[("reward", FIRST + k, 0)]["reward"] == live_by_stamp[FIRST + k]
-    distinct = {recorded[("empowerment", FIRST + k, 0)]["empowerment"] for k in range(len(STATES))}
+        scored = [s["reward"] for s in recorded[("reward", FIRST + k, 0)]]
+        assert scored == [live_by_stamp[FIRST + k]], (FIRST + k, scored)
+    distinct = {
+        recorded[("empowerment", FIRST + k, 0)][0]["empowerment"] for k in range(len(STATES))
+    }
     assert len(distinct) == len(STATES), "the states scored alike: the comparison proves little"
 
     # A fresh node on a domain of its own: only the replay talks to it.
@@ -138,8 +141,8 @@ def test_a_recorded_run_replayed_to_a_fresh_node_gets_the_same_scores(
     assert " 0 differ;" in comparison.stdout, comparison.stdout
 
 
-def write_scores(path: Path, scored: dict[int, float]) -> None:
-    """A bag with one score and reward per stamp (seconds) of ``scored``, of that empowerment."""
+def write_scores(path: Path, scored: list[tuple[int, float]]) -> None:
+    """A bag with a score and a reward for each (stamp in seconds, empowerment) of ``scored``."""
     from rosbags.rosbag2 import StoragePlugin, Writer
 
     store = typestore()
@@ -149,7 +152,7 @@ def write_scores(path: Path, scored: dict[int, float]) -> None:
             "/cstep/empowerment", OUTPUTS["cstep/empowerment"], typestore=store
         )
         reward = writer.add_connection("/cstep/reward", OUTPUTS["cstep/reward"], typestore=store)
-        for sec, value in scored.items():
+        for sec, value in scored:
             header = kinds["std_msgs/msg/Header"](
                 stamp=kinds["builtin_interfaces/msg/Time"](sec=sec, nanosec=0), frame_id="odom"
             )
@@ -162,9 +165,9 @@ def write_scores(path: Path, scored: dict[int, float]) -> None:
 
 
 def test_compare_names_a_changed_score_and_needs_scores_in_common(tmp_path, capsys):
-    write_scores(tmp_path / "a", {1: 2.5, 2: 1.25})
-    write_scores(tmp_path / "b", {1: 2.5, 2: 1.5})
-    write_scores(tmp_path / "c", {7: 2.5})
+    write_scores(tmp_path / "a", [(1, 2.5), (2, 1.25)])
+    write_scores(tmp_path / "b", [(1, 2.5), (2, 1.5)])
+    write_scores(tmp_path / "c", [(7, 2.5)])
     assert compare(tmp_path / "a", tmp_path / "a") == 0
     capsys.readouterr()
     assert compare(tmp_path / "a", tmp_path / "b") == 1
@@ -201,10 +204,23 @@ def write_odometry(path: Path, count: int, gap_s: float = 0.1) -> None:
             writer.write(odom, round(k * gap_s * 1e9), serialize_message(message))
 
 
+def test_compare_sees_a_scan_scored_twice_differently(tmp_path, capsys):
+    """The node scored one scan (stamp 2 s) twice in one run, with different results (the scan
+    came twice and met different odometry): compare must not keep only the last score and call
+    the runs identical. The same score twice is one score."""
+    write_scores(tmp_path / "twice", [(2, 1.25), (2, 1.5)])
+    write_scores(tmp_path / "once", [(2, 1.5)])
+    write_scores(tmp_path / "same-twice", [(2, 1.5), (2, 1.5)])
+    assert compare(tmp_path / "twice", tmp_path / "once") == 1
+    out = capsys.readouterr().out
+    assert f"2.000000000 empowerment: 2 different scores in {tmp_path / 'twice'}, 1 in" in out, out
+    assert compare(tmp_path / "once", tmp_path / "same-twice") == 0
+
+
 def test_a_bag_of_the_wrong_kind_is_refused_with_one_line(tmp_path, capsys):
     """rosbags reads every topic when asked for none: a bag with no input topic (the scores a
     replay recorded) must not be replayed as inputs, nor one with no score topic compared."""
-    write_scores(tmp_path / "scores", {1: 2.5})
+    write_scores(tmp_path / "scores", [(1, 2.5)])
     write_odometry(tmp_path / "inputs", 2)
     assert main(["replay", str(tmp_path / "scores")]) == 1
     err = capsys.readouterr().err

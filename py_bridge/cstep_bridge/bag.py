@@ -4,13 +4,13 @@ PyPI wheel), with rclpy and the pure-Python ``rosbags`` package.
 
 ::
 
-    python -m cstep_bridge.bag record run1                     # until Ctrl-C (or --duration S)
+    python -m cstep_bridge.bag record run1                     # until Ctrl-C, kill or --duration S
     python -m cstep_bridge.bag replay run1 --record run1-replayed  # to a fresh node
     python -m cstep_bridge.bag compare run1 run1-replayed      # exit 0: the same scores
 
 ``record`` subscribes to the inputs (``odom``, ``scan``, ``goal_pose``) and outputs
 (``cstep/empowerment``, ``cstep/reward``) of a node in the root namespace, and stores each
-message as it arrived (its CDR bytes, stamped with the receive time), with the cstep_msgs
+message as it arrived (its CDR bytes, stamped with the time DDS received it), with the cstep_msgs
 definitions. ``replay`` publishes the recorded inputs, bytes and stamps unchanged, at the
 recorded pace (``--rate``), and records what the node answers. ``compare`` matches the scores
 of two bags by their stamp (the scan's) and reports any field that differs.
@@ -28,8 +28,10 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import signal
 import sys
 import time
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -57,6 +59,54 @@ CSTEP_MESSAGES = ("Empowerment", "EmpoweredReward")
 """cstep_msgs's messages, registered with rosbags from their .msg files."""
 
 
+INTERRUPTED = 130
+"""The exit code of a command that Ctrl-C cut short (as a shell reports SIGINT), but for
+``record``, which Ctrl-C ends normally."""
+
+
+class BagError(Exception):
+    """A bag that cannot be read or written as asked: :func:`main` prints it as one line."""
+
+
+def new_bag(path: Path) -> Path:
+    """``path``, which must not exist yet (rosbags creates bags, never overwrites them)."""
+    if path.exists():
+        raise BagError(f"{path} exists already: record into a new bag")
+    return path
+
+
+@contextmanager
+def open_bag(path: Path):
+    """An open rosbags reader of the bag at ``path``, closed on leaving the ``with``."""
+    from rosbags.rosbag2 import Reader, ReaderError
+
+    if not path.exists():
+        raise BagError(f"no bag at {path}")
+    if path.is_dir() and not (path / "metadata.yaml").is_file():
+        raise BagError(
+            f"{path} has no metadata.yaml: not a bag, or a recording that did not end cleanly"
+        )
+    try:
+        reader = Reader(path)
+        reader.open()
+    except ReaderError as err:
+        raise BagError(f"cannot read {path}: {err}") from err
+    try:
+        yield reader
+    except ReaderError as err:
+        raise BagError(f"cannot read {path}: {err}") from err
+    finally:
+        reader.close()
+
+
+def messages_of(reader, msgtypes):
+    """The messages (connection, time ns, CDR bytes) of ``reader`` on topics of ``msgtypes``,
+    in time order; none when it has no such topic (rosbags reads every topic when asked for
+    none)."""
+    connections = [c for c in reader.connections if c.msgtype in msgtypes]
+    return reader.messages(connections=connections) if connections else iter(())
+
+
 def typestore():
     """rosbags' ROS 2 Jazzy type store with cstep_msgs added from the definitions installed
     beside the ``cstep_msgs`` Python package (``<prefix>/share/cstep_msgs/msg/*.msg``, as
@@ -70,7 +120,7 @@ def typestore():
     for name in CSTEP_MESSAGES:
         path = share / f"{name}.msg"
         if not path.is_file():
-            raise FileNotFoundError(f"no definition of cstep_msgs/msg/{name}: {path} is missing")
+            raise BagError(f"no definition of cstep_msgs/msg/{name}: {path} is missing")
         types.update(get_types_from_msg(path.read_text(), f"cstep_msgs/msg/{name}"))
     store.register(types)
     return store
@@ -82,14 +132,23 @@ def message_class(msgtype: str):
     return getattr(importlib.import_module(f"{package}.msg"), name)
 
 
-def qos(topic: str):
-    """Inputs: best effort (matches sensor-data and reliable publishers alike); scores:
-    reliable, as the node publishes them."""
-    from rclpy.qos import QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
+RECORDER_QUEUE = 1000
+"""Messages per topic a recorder's subscription holds while the recorder is behind (writing the
+bag, or starved of CPU) before the oldest are dropped."""
 
-    if topic in INPUTS:
-        return qos_profile_sensor_data
-    return QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE)
+
+def recorder_qos(topic: str):
+    """Inputs: best effort (matches sensor-data and reliable publishers alike); scores:
+    reliable, as the node publishes them; either way a queue of RECORDER_QUEUE."""
+    from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+
+    return QoSProfile(
+        depth=RECORDER_QUEUE,
+        reliability=ReliabilityPolicy.BEST_EFFORT
+        if topic in INPUTS
+        else ReliabilityPolicy.RELIABLE,
+        durability=DurabilityPolicy.VOLATILE,
+    )
 
 
 class Recording:
@@ -111,14 +170,16 @@ class Recording:
                     message_class(msgtype),
                     name,
                     self._writes(topic, connection),
-                    qos(topic),
+                    recorder_qos(topic),
                     raw=True,
                 )
             )
 
     def _writes(self, topic: str, connection):
-        def write(data: bytes) -> None:
-            self.writer.write(connection, time.time_ns(), data)
+        def write(data: bytes, info) -> None:
+            # Stamped when DDS received it, not when this thread got to it: replay paces and
+            # orders the messages by these stamps.
+            self.writer.write(connection, info["received_timestamp"] or time.time_ns(), data)
             self.counts[topic] += 1
 
         return write
@@ -148,17 +209,21 @@ def ros_node():
 
 def record(path: Path, duration: float | None) -> int:
     """``record``: the inputs and scores into ``path`` until Ctrl-C or ``duration`` seconds."""
+    new_bag(path)
+    store = typestore()
     context, node, executor = ros_node()
-    recording = Recording(node, path, INPUTS | OUTPUTS, typestore())
-    print(f"recording {', '.join(recording.counts)} into {path}", flush=True)
-    end = time.monotonic() + duration if duration is not None else None
+    recording = None
     try:
+        recording = Recording(node, path, INPUTS | OUTPUTS, store)
+        print(f"recording {', '.join(recording.counts)} into {path}", flush=True)
+        end = time.monotonic() + duration if duration is not None else None
         while end is None or time.monotonic() < end:
             executor.spin_once(timeout_sec=0.05)
     except KeyboardInterrupt:
-        pass
+        pass  # Ctrl-C is how a recording ends
     finally:
-        print(f"recorded {recording.close()}", flush=True)
+        if recording:
+            print(f"recorded {recording.close()}", flush=True)
         context.try_shutdown()
     return 0
 
@@ -173,13 +238,13 @@ class Replay:
 
     @classmethod
     def read(cls, path: Path) -> Replay:
-        from rosbags.rosbag2 import Reader
-
-        with Reader(path) as reader:
-            inputs = [c for c in reader.connections if c.msgtype in INPUTS.values()]
-            messages = [(t, c.topic, bytes(d)) for c, t, d in reader.messages(connections=inputs)]
-            played = {topic for _, topic, _ in messages}
-            return cls(messages, {c.topic: c.msgtype for c in inputs if c.topic in played})
+        with open_bag(path) as reader:
+            found = list(messages_of(reader, INPUTS.values()))
+        if not found:
+            raise BagError(f"{path} holds no odom, scan or goal_pose message")
+        return cls(
+            [(t, c.topic, bytes(d)) for c, t, d in found], {c.topic: c.msgtype for c, _, _ in found}
+        )
 
 
 def replay(path: Path, out: Path | None, rate: float) -> int:
@@ -190,11 +255,12 @@ def replay(path: Path, out: Path | None, rate: float) -> int:
     from rclpy.qos import QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
 
     inputs = Replay.read(path)
-    if not inputs.messages:
-        print(f"cstep_bridge.bag: {path} holds no odom, scan or goal_pose message", file=sys.stderr)
-        return 1
+    store = typestore()
+    if out:
+        new_bag(out)
     context, node, executor = ros_node()
-    recording = Recording(node, out, OUTPUTS, typestore()) if out else None
+    recording = Recording(node, out, OUTPUTS, store) if out else None
+    sent = 0
     publishers = {
         topic: node.create_publisher(
             message_class(msgtype),
@@ -227,7 +293,8 @@ def replay(path: Path, out: Path | None, rate: float) -> int:
             while (wait := start + (stamp - first) / 1e9 / rate - time.monotonic()) > 0:
                 executor.spin_once(timeout_sec=min(wait, 0.01))
             publishers[topic].publish(data)
-        print(f"replayed {len(inputs.messages)} messages", flush=True)
+            sent += 1
+        print(f"replayed {sent} messages", flush=True)
         spin_for(executor, 2.0)  # the last scores arrive
     except KeyboardInterrupt:
         pass
@@ -235,6 +302,12 @@ def replay(path: Path, out: Path | None, rate: float) -> int:
         if recording:
             print(f"recorded {recording.close()}", flush=True)
         context.try_shutdown()
+    if sent < len(inputs.messages):
+        print(
+            f"cstep_bridge.bag: interrupted after {sent} of {len(inputs.messages)} messages",
+            file=sys.stderr,
+        )
+        return INTERRUPTED
     return 0
 
 
@@ -244,16 +317,14 @@ def spin_for(executor, seconds: float) -> None:
         executor.spin_once(timeout_sec=0.01)
 
 
-def scores(path: Path) -> dict[tuple[str, int, int], dict[str, object]]:
+def scores(path: Path) -> dict[tuple[str, int, int], list[dict[str, object]]]:
     """The score messages in a bag by kind (``empowerment``, ``reward``) and the stamp of the
-    scan they score (seconds, nanoseconds): each message's fields but its stamp, by name."""
-    from rosbags.rosbag2 import Reader
-
+    scan they score (seconds, nanoseconds): the distinct scores of that scan, in bag order (a
+    scan that came twice may be scored twice), each its fields but the stamp, by name."""
     store = typestore()
-    found: dict[tuple[str, int, int], dict[str, object]] = {}
-    with Reader(path) as reader:
-        connections = [c for c in reader.connections if c.msgtype in OUTPUTS.values()]
-        for connection, _, data in reader.messages(connections=connections):
+    found: dict[tuple[str, int, int], list[dict[str, object]]] = {}
+    with open_bag(path) as reader:
+        for connection, _, data in messages_of(reader, OUTPUTS.values()):
             message = store.deserialize_cdr(data, connection.msgtype)
             kind = "reward" if connection.msgtype == OUTPUTS["cstep/reward"] else "empowerment"
             stamp = message.header.stamp
@@ -263,23 +334,35 @@ def scores(path: Path) -> dict[tuple[str, int, int], dict[str, object]]:
                 for name in message.__dataclass_fields__
                 if name not in ("header", "__msgtype__")
             )
-            found[(kind, stamp.sec, stamp.nanosec)] = fields
+            scored = found.setdefault((kind, stamp.sec, stamp.nanosec), [])
+            if fields not in scored:
+                scored.append(fields)
+    if not found:
+        raise BagError(f"{path} holds no cstep/empowerment or cstep/reward message")
     return found
 
 
 def compare(first: Path, second: Path) -> int:
     """``compare``: 0 when the two bags share at least one score message and every shared one
-    is identical, field for field; 1 otherwise. Prints each field that differs, and a summary
+    is identical, field for field; 1 otherwise. Prints each field that differs (or, for a scan
+    scored differently more than once, how many scores each bag has of it), and a summary
     (messages in one bag only, such as scans the node skipped in one run, are counted)."""
     a, b = scores(first), scores(second)
     shared = sorted(a.keys() & b.keys())
     differ = 0
     for key in shared:
         kind, sec, nanosec = key
-        changed = [f for f in a[key] if a[key][f] != b[key].get(f)]
+        at = f"{sec}.{nanosec:09d} {kind}"
+        if len(a[key]) == len(b[key]) == 1:
+            x, y = a[key][0], b[key][0]
+            changed = [f for f in x if x[f] != y.get(f)]
+            for f in changed:
+                print(f"{at}.{f}: {x[f]!r} != {y.get(f)!r}")
+        else:
+            changed = any(s not in b[key] for s in a[key]) or any(s not in a[key] for s in b[key])
+            if changed:
+                print(f"{at}: {len(a[key])} different scores in {first}, {len(b[key])} in {second}")
         differ += bool(changed)
-        for f in changed:
-            print(f"{sec}.{nanosec:09d} {kind}.{f}: {a[key][f]!r} != {b[key].get(f)!r}")
     print(
         f"{len(shared)} score messages in both bags, {len(shared) - differ} identical, "
         f"{differ} differ; {len(a.keys() - b.keys())} only in {first}, "
@@ -304,14 +387,24 @@ def main(argv: list[str] | None = None) -> int:
     cmp.add_argument("first", type=Path)
     cmp.add_argument("second", type=Path)
     args = parser.parse_args(argv)
-    if args.command == "record":
-        return record(args.bag, args.duration)
-    if args.command == "replay":
-        if not args.rate > 0:
-            parser.error(f"--rate must be > 0, got {args.rate}")
-        return replay(args.bag, args.record, args.rate)
-    return compare(args.first, args.second)
+    if args.command == "replay" and not args.rate > 0:
+        parser.error(f"--rate must be > 0, got {args.rate}")
+    try:
+        if args.command == "record":
+            return record(args.bag, args.duration)
+        if args.command == "replay":
+            return replay(args.bag, args.record, args.rate)
+        return compare(args.first, args.second)
+    except BagError as err:
+        print(f"cstep_bridge.bag: {err}", file=sys.stderr)
+        return 1
+    except KeyboardInterrupt:
+        print("cstep_bridge.bag: interrupted", file=sys.stderr)
+        return INTERRUPTED
 
 
 if __name__ == "__main__":
+    # `kill PID` (SIGTERM) ends a command as Ctrl-C does: a recording closes its bag. A command
+    # started in the background by a script never gets Ctrl-C (its shell ignores SIGINT there).
+    signal.signal(signal.SIGTERM, signal.default_int_handler)
     sys.exit(main())

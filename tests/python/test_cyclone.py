@@ -46,7 +46,7 @@ import time
 import typing
 
 import pytest
-from conftest import DISCOVERY_TIMEOUT_S
+from conftest import DISCOVERY_TIMEOUT_S, wait_until
 from cyclone_types import (
     CycloneEvaluateRequest,
     CycloneEvaluateResponse,
@@ -126,16 +126,6 @@ def cyclone(ros_domain):
     c.close()
 
 
-def wait_for(condition, what: str, timeout: float = DISCOVERY_TIMEOUT_S):
-    """Poll ``condition`` until it returns something truthy, which is returned."""
-    deadline = time.monotonic() + timeout
-    while not (result := condition()):
-        if time.monotonic() > deadline:
-            pytest.fail(f"timed out after {timeout:.0f} s waiting for {what}")
-        time.sleep(0.02)
-    return result
-
-
 def matched(*endpoints) -> bool:
     return all(
         e.get_matched_subscriptions() if isinstance(e, DataWriter) else e.get_matched_publications()
@@ -160,7 +150,7 @@ def test_cyclone_feeds_the_node_and_receives_its_scores(cstep_node, cyclone, tmp
     scan = cyclone.writer("rt/scan", LaserScan, ros_qos(reliable=False, depth=5))
     empowerment = cyclone.reader("rt/cstep/empowerment", Empowerment)
     reward = cyclone.reader("rt/cstep/reward", EmpoweredReward)
-    wait_for(lambda: matched(odom, scan, empowerment, reward), "the node's endpoints")
+    wait_until(lambda: matched(odom, scan, empowerment, reward), "the node's endpoints")
 
     # The node may not have matched our readers yet when ours match its writers (discovery is
     # not symmetric in time): feed state 0 until a score arrives, then each state in turn.
@@ -229,7 +219,7 @@ def call_until_answered(request_writer, reply_reader, request, stamp_sec: int):
 def test_cyclone_calls_evaluate_in_the_fast_dds_layout(cstep_node, cyclone, tmp_path):
     requests = cyclone.writer("rq/cstep/evaluateRequest", EvaluateRequest)
     replies = cyclone.reader("rr/cstep/evaluateReply", EvaluateResponse)
-    wait_for(lambda: matched(requests, replies), "the evaluate service's endpoints")
+    wait_until(lambda: matched(requests, replies), "the evaluate service's endpoints")
 
     for k in range(len(STATES)):
         ros_odom, ros_scan = ros_inputs(k)
@@ -256,7 +246,7 @@ def test_an_rmw_cyclonedds_client_gets_no_answer(cstep_node, cyclone):
     replies = cyclone.reader("rr/cstep/evaluateReply", CycloneEvaluateResponse, None, client)
     # An observer of the replies as the node writes them (bare, the Fast DDS layout).
     observed = cyclone.reader("rr/cstep/evaluateReply", EvaluateResponse)
-    wait_for(lambda: matched(requests, replies, observed), "the evaluate service's endpoints")
+    wait_until(lambda: matched(requests, replies, observed), "the evaluate service's endpoints")
 
     ros_odom, ros_scan = ros_inputs(0)
     # rmw_cyclonedds: the request writer's instance handle (a uint64; Python gets it signed).

@@ -29,8 +29,8 @@ use ros2_client::{
     QosProfile, Server, ServiceMapping, ServiceTypeName,
 };
 
-use super::args::RosArgs;
-use super::context::{context_from_env, resolve};
+use super::args::{NameKind, RosArgs};
+use super::context::context_from_env;
 use super::convert::{
     empowerment_message, goal_position, laser_scan_to_scan, odometry_to_state, reward_message,
 };
@@ -40,9 +40,10 @@ use super::messages::{
     EvaluateBatchResponse, EvaluateRequest, EvaluateResponse, Header, KeyValue, LaserScan,
     MarkerArray, Odometry, Point, PoseStamped, Time,
 };
+use super::param_overrides::{ParamOverrides, ParamSource};
 use super::rivals::{self, Claims, Verdict};
 use super::stamps::{Order, StampOrder};
-use crate::config::{load_all, NodeSettings, DEFAULT_NODE_NAME};
+use crate::config::{validate, NodeSettings, ParameterSet, DEFAULT_NODE_NAME};
 use crate::estimator::{Estimator, EMPOWERMENT_FLOOR};
 use crate::reward::{empowered_reward, floor_reward, task_reward};
 
@@ -51,14 +52,11 @@ use crate::reward::{empowered_reward, floor_reward, task_reward};
 /// ([`super::context`]), and serves. An error if another node already answers under its names
 /// on that domain ([`super::rivals`]): the node then stops within its first seconds.
 pub fn run(config: &[PathBuf], ros_args: &RosArgs, stop: Arc<AtomicBool>) -> Result<(), String> {
-    let node_name = ros_args.node_name.as_deref().unwrap_or(DEFAULT_NODE_NAME);
-    let paths: Vec<&std::path::Path> = config
-        .iter()
-        .chain(&ros_args.params_files)
-        .map(PathBuf::as_path)
-        .collect();
-    let (settings, interface) =
-        load_all(&paths, node_name, &ros_args.params).map_err(|e| e.to_string())?;
+    refuse_security(ros_args)?;
+    let node_name = ros_args.node_name(DEFAULT_NODE_NAME);
+    let namespace = ros_args.namespace(&node_name);
+    let fqn = format!("{}/{node_name}", namespace.trim_end_matches('/'));
+    let (settings, interface) = load_parameters(config, ros_args, &fqn)?;
     let estimator = Estimator::from_settings(&settings).map_err(|e| e.to_string())?;
     let shared = Arc::new(Shared::new(
         estimator,
@@ -69,22 +67,21 @@ pub fn run(config: &[PathBuf], ros_args: &RosArgs, stop: Arc<AtomicBool>) -> Res
     ));
 
     let context = context_from_env(true)?;
-    let namespace = ros_args.namespace.as_deref().unwrap_or("/");
     let options = parameter_options(&shared, &settings);
     let mut node = context
         .new_node(
-            NodeName::new(namespace, node_name).map_err(|e| format!("node name: {e:?}"))?,
+            NodeName::new(&namespace, &node_name).map_err(|e| format!("node name: {e:?}"))?,
             options,
         )
         .map_err(|e| format!("cannot create the node: {e:?}"))?;
-    let ports = Ports::open(&mut node, &interface, ros_args, namespace)?;
-    let named = |name: &str| resolve(namespace, ros_args.remap(name));
+    let names = Names::resolve(&interface, ros_args, &node_name, &namespace)?;
+    let ports = Ports::open(&mut node, &names)?;
     let guard = Guard {
         claims: Claims::new()
-            .topic(&named(&interface.empowerment_topic))
-            .topic(&named(&interface.reward_topic))
-            .service(&named(&interface.evaluate_service))
-            .service(&named(&interface.evaluate_batch_service)),
+            .topic(&names.empowerment)
+            .topic(&names.reward)
+            .service(&names.evaluate)
+            .service(&names.evaluate_batch),
         participant: context.domain_participant(),
         started: Instant::now(),
         node: node.fully_qualified_name(),
@@ -95,13 +92,13 @@ pub fn run(config: &[PathBuf], ros_args: &RosArgs, stop: Arc<AtomicBool>) -> Res
          services {}, {}",
         node.fully_qualified_name(),
         context.domain_id(),
-        ros_args.remap(&interface.odom_topic),
-        ros_args.remap(&interface.scan_topic),
-        ros_args.remap(&interface.empowerment_topic),
-        ros_args.remap(&interface.reward_topic),
-        ros_args.remap(&interface.markers_topic),
-        ros_args.remap(&interface.evaluate_service),
-        ros_args.remap(&interface.evaluate_batch_service),
+        names.odom,
+        names.scan,
+        names.empowerment,
+        names.reward,
+        names.markers,
+        names.evaluate,
+        names.evaluate_batch,
     );
 
     let worker = {
@@ -128,6 +125,85 @@ pub fn run(config: &[PathBuf], ros_args: &RosArgs, stop: Arc<AtomicBool>) -> Res
     }
     eprintln!("cstep node stopped");
     Ok(())
+}
+
+/// Refuses `ROS_SECURITY_ENABLE=true`: RustDDS is built here without DDS Security, so the node
+/// would run unencrypted where its user asked for security. Without it an enclave (`-e`) is
+/// unused, as rcl leaves it unused, and the node says so.
+fn refuse_security(ros_args: &RosArgs) -> Result<(), String> {
+    if std::env::var("ROS_SECURITY_ENABLE").as_deref() == Ok("true") {
+        return Err(
+            "ROS_SECURITY_ENABLE=true, but cstep cannot run secured (its DDS, RustDDS, \
+             is built without DDS Security); refusing to run unsecured"
+                .into(),
+        );
+    }
+    if let Some(enclave) = &ros_args.enclave {
+        eprintln!("cstep: enclave {enclave} unused: ROS_SECURITY_ENABLE is not true");
+    }
+    Ok(())
+}
+
+/// The node's parameters: the built-in defaults, then the `--config` files and `--ros-args`
+/// overrides that apply to node `fqn` ([`super::param_overrides`]), validated.
+fn load_parameters(
+    config: &[PathBuf],
+    ros_args: &RosArgs,
+    fqn: &str,
+) -> Result<(crate::config::Settings, NodeSettings), String> {
+    let sources: Vec<ParamSource> = config
+        .iter()
+        .cloned()
+        .map(ParamSource::File)
+        .chain(ros_args.params.iter().cloned())
+        .collect();
+    let overrides = ParamOverrides::read(&sources)?;
+    for warning in overrides.unmatched_files(fqn) {
+        eprintln!("cstep: warning: {warning}");
+    }
+    let mut set = ParameterSet::builtin();
+    for o in overrides.for_node(fqn) {
+        set.insert(&o.name, o.value, &o.source, o.base_dir.as_deref());
+    }
+    validate(set).map_err(|e| e.to_string())
+}
+
+/// The node's topic and service names, fully qualified after namespace and remapping.
+struct Names {
+    odom: String,
+    scan: String,
+    goal: String,
+    empowerment: String,
+    reward: String,
+    markers: String,
+    diagnostics: String,
+    evaluate: String,
+    evaluate_batch: String,
+}
+
+impl Names {
+    /// Resolves the configured names for node `node` in `namespace` by rcl's rules
+    /// ([`RosArgs::resolve`]).
+    fn resolve(
+        interface: &NodeSettings,
+        args: &RosArgs,
+        node: &str,
+        namespace: &str,
+    ) -> Result<Self, String> {
+        let topic = |name: &str| args.resolve(name, NameKind::Topic, node, namespace);
+        let service = |name: &str| args.resolve(name, NameKind::Service, node, namespace);
+        Ok(Self {
+            odom: topic(&interface.odom_topic)?,
+            scan: topic(&interface.scan_topic)?,
+            goal: topic(&interface.goal_topic)?,
+            empowerment: topic(&interface.empowerment_topic)?,
+            reward: topic(&interface.reward_topic)?,
+            markers: topic(&interface.markers_topic)?,
+            diagnostics: topic("/diagnostics")?,
+            evaluate: service(&interface.evaluate_service)?,
+            evaluate_batch: service(&interface.evaluate_batch_service)?,
+        })
+    }
 }
 
 /// Watches DDS discovery for another participant answering under this node's names
@@ -226,12 +302,7 @@ struct Ports {
 }
 
 impl Ports {
-    fn open(
-        node: &mut Node,
-        interface: &NodeSettings,
-        args: &RosArgs,
-        namespace: &str,
-    ) -> Result<Self, String> {
+    fn open(node: &mut Node, names: &Names) -> Result<Self, String> {
         let reliable = QosProfile::publisher_default()
             .reliability_reliable(WhenFull::Wait(Duration::from_millis(10)))
             .durability(Durability::Volatile)
@@ -242,51 +313,34 @@ impl Ports {
             .durability(Durability::Volatile)
             .history(History::KeepLast { depth: 5 });
         let topic = |name: &str, package: &str, kind: &str, qos: &QosProfile| {
-            let name = resolve(namespace, args.remap(name));
-            let parsed = Name::parse(&name).map_err(|e| format!("topic name \"{name}\": {e:?}"))?;
+            let parsed = Name::parse(name).map_err(|e| format!("topic name \"{name}\": {e:?}"))?;
             node.create_topic(&parsed, MessageTypeName::new(package, kind), qos)
                 .map_err(|e| format!("topic {name}: {e:?}"))
         };
-        let odom_topic = topic(&interface.odom_topic, "nav_msgs", "Odometry", &sensor)?;
-        let scan_topic = topic(&interface.scan_topic, "sensor_msgs", "LaserScan", &sensor)?;
-        let goal_topic = topic(
-            &interface.goal_topic,
-            "geometry_msgs",
-            "PoseStamped",
-            &reliable,
-        )?;
-        let empowerment_topic = topic(
-            &interface.empowerment_topic,
-            "cstep_msgs",
-            "Empowerment",
-            &reliable,
-        )?;
-        let reward_topic = topic(
-            &interface.reward_topic,
-            "cstep_msgs",
-            "EmpoweredReward",
-            &reliable,
-        )?;
+        let odom_topic = topic(&names.odom, "nav_msgs", "Odometry", &sensor)?;
+        let scan_topic = topic(&names.scan, "sensor_msgs", "LaserScan", &sensor)?;
+        let goal_topic = topic(&names.goal, "geometry_msgs", "PoseStamped", &reliable)?;
+        let empowerment_topic = topic(&names.empowerment, "cstep_msgs", "Empowerment", &reliable)?;
+        let reward_topic = topic(&names.reward, "cstep_msgs", "EmpoweredReward", &reliable)?;
         let markers_topic = topic(
-            &interface.markers_topic,
+            &names.markers,
             "visualization_msgs",
             "MarkerArray",
             &reliable,
         )?;
         let diagnostics_topic = topic(
-            "/diagnostics",
+            &names.diagnostics,
             "diagnostic_msgs",
             "DiagnosticArray",
             &reliable,
         )?;
         let service = |name: &str, kind: &str| {
-            let name = resolve(namespace, args.remap(name));
             let parsed =
                 Name::parse(&name).map_err(|e| format!("service name \"{name}\": {e:?}"))?;
             Ok::<_, String>((parsed, ServiceTypeName::new("cstep_msgs", kind)))
         };
-        let (evaluate_name, evaluate_type) = service(&interface.evaluate_service, "Evaluate")?;
-        let (batch_name, batch_type) = service(&interface.evaluate_batch_service, "EvaluateBatch")?;
+        let (evaluate_name, evaluate_type) = service(&names.evaluate, "Evaluate")?;
+        let (batch_name, batch_type) = service(&names.evaluate_batch, "EvaluateBatch")?;
         Ok(Self {
             odom: node
                 .create_subscription(&odom_topic, Some(sensor.clone()))

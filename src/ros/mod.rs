@@ -9,6 +9,7 @@ pub mod args;
 pub mod context;
 pub mod convert;
 pub mod echo;
+pub mod logging;
 pub mod markers;
 pub mod messages;
 pub mod node;

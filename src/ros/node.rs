@@ -28,12 +28,14 @@ use ros2_client::{
     Message, MessageTypeName, Name, Node, NodeName, NodeOptions, ParameterValue, Publisher,
     QosProfile, Server, ServiceMapping, ServiceTypeName,
 };
+use tracing::{debug, info, warn};
 
 use super::args::{NameKind, RosArgs};
 use super::context::context_from_env;
 use super::convert::{
     empowerment_message, goal_position, laser_scan_to_scan, odometry_to_state, reward_message,
 };
+use super::logging;
 use super::markers::rollout_markers;
 use super::messages::{
     DiagnosticArray, DiagnosticStatus, EmpoweredReward, Empowerment, EvaluateBatchRequest,
@@ -44,7 +46,7 @@ use super::param_overrides::{ParamOverrides, ParamSource};
 use super::rivals::{self, Claims, Verdict};
 use super::stamps::{Order, StampOrder};
 use crate::config::{validate, NodeSettings, ParameterSet, DEFAULT_NODE_NAME};
-use crate::estimator::{Estimator, EMPOWERMENT_FLOOR};
+use crate::estimator::{robot_description, Estimator, EMPOWERMENT_FLOOR};
 use crate::reward::{empowered_reward, floor_reward, task_reward};
 
 /// Runs the node until `stop` is set: loads the parameters files and `--ros-args`, joins the
@@ -52,12 +54,20 @@ use crate::reward::{empowered_reward, floor_reward, task_reward};
 /// ([`super::context`]), and serves. An error if another node already answers under its names
 /// on that domain ([`super::rivals`]): the node then stops within its first seconds.
 pub fn run(config: &[PathBuf], ros_args: &RosArgs, stop: Arc<AtomicBool>) -> Result<(), String> {
-    refuse_security(ros_args)?;
     let node_name = ros_args.node_name(DEFAULT_NODE_NAME);
     let namespace = ros_args.namespace(&node_name);
+    logging::init(ros_args, &logging::logger_name(&namespace, &node_name))?;
+    refuse_security(ros_args)?;
     let fqn = format!("{}/{node_name}", namespace.trim_end_matches('/'));
     let (settings, interface) = load_parameters(config, ros_args, &fqn)?;
     let estimator = Estimator::from_settings(&settings).map_err(|e| e.to_string())?;
+    let status = StatusIdentity {
+        // diagnostic_updater's convention: "<node's fully qualified name>: <task>".
+        name: format!("{fqn}: empowerment"),
+        hardware_id: robot_description(&settings)
+            .map_err(|e| e.to_string())?
+            .name,
+    };
     let shared = Arc::new(Shared::new(
         estimator,
         settings.safety_coefficient,
@@ -67,7 +77,7 @@ pub fn run(config: &[PathBuf], ros_args: &RosArgs, stop: Arc<AtomicBool>) -> Res
     ));
 
     let context = context_from_env(true)?;
-    let options = parameter_options(&shared, &settings);
+    let options = parameter_options(&shared, &settings, interface.use_sim_time);
     let mut node = context
         .new_node(
             NodeName::new(&namespace, &node_name).map_err(|e| format!("node name: {e:?}"))?,
@@ -87,7 +97,7 @@ pub fn run(config: &[PathBuf], ros_args: &RosArgs, stop: Arc<AtomicBool>) -> Res
         node: node.fully_qualified_name(),
         domain: context.domain_id(),
     };
-    eprintln!(
+    info!(
         "cstep node {} on ROS_DOMAIN_ID {}: {} + {} -> {}, {} (markers on {} while subscribed); \
          services {}, {}",
         node.fully_qualified_name(),
@@ -114,7 +124,7 @@ pub fn run(config: &[PathBuf], ros_args: &RosArgs, stop: Arc<AtomicBool>) -> Res
     executor
         .spawn(node.spinner().map_err(|e| format!("{e:?}"))?.spin())
         .detach();
-    smol::block_on(executor.run(serve(&shared, &ports, &node, &guard)));
+    smol::block_on(executor.run(serve(&shared, &ports, &node, &guard, &status)));
     shared.stopping.store(true, Ordering::SeqCst);
     shared.arrived.notify_all();
     worker
@@ -123,7 +133,7 @@ pub fn run(config: &[PathBuf], ros_args: &RosArgs, stop: Arc<AtomicBool>) -> Res
     if let Some(refusal) = shared.latest().refusal.take() {
         return Err(refusal);
     }
-    eprintln!("cstep node stopped");
+    info!("cstep node stopped");
     Ok(())
 }
 
@@ -139,7 +149,7 @@ fn refuse_security(ros_args: &RosArgs) -> Result<(), String> {
         );
     }
     if let Some(enclave) = &ros_args.enclave {
-        eprintln!("cstep: enclave {enclave} unused: ROS_SECURITY_ENABLE is not true");
+        info!("enclave {enclave} unused: ROS_SECURITY_ENABLE is not true");
     }
     Ok(())
 }
@@ -159,10 +169,16 @@ fn load_parameters(
         .collect();
     let overrides = ParamOverrides::read(&sources)?;
     for warning in overrides.unmatched_files(fqn) {
-        eprintln!("cstep: warning: {warning}");
+        warn!("{warning}");
     }
     let mut set = ParameterSet::builtin();
     for o in overrides.for_node(fqn) {
+        debug!(
+            "parameter override {} = {} ({})",
+            o.name,
+            serde_json::to_string(&o.value).unwrap_or_default(),
+            o.source
+        );
         set.insert(&o.name, o.value, &o.source, o.base_dir.as_deref());
     }
     validate(set).map_err(|e| e.to_string())
@@ -203,6 +219,23 @@ impl Names {
             evaluate: service(&interface.evaluate_service)?,
             evaluate_batch: service(&interface.evaluate_batch_service)?,
         })
+    }
+}
+
+/// Who the diagnostics status is about: its name and hardware.
+struct StatusIdentity {
+    /// `<fully qualified node name>: empowerment`.
+    name: String,
+    /// The robot, as its URDF names it.
+    hardware_id: String,
+}
+
+/// A ROS time as a message stamp.
+fn stamp(time: ros2_client::ROSTime) -> Time {
+    let nanos = time.to_nanos();
+    Time {
+        sec: nanos.div_euclid(1_000_000_000) as i32,
+        nanosec: nanos.rem_euclid(1_000_000_000) as u32,
     }
 }
 
@@ -395,11 +428,17 @@ fn failed<E: std::fmt::Debug>(what: &'static str) -> impl FnOnce(E) -> String {
 
 /// Declares the live parameter: a `safety_coefficient` change takes effect at the next score.
 /// The others are fixed for the node's life (they shape the control sample and the model).
-fn parameter_options(shared: &Arc<Shared>, settings: &crate::config::Settings) -> NodeOptions {
+/// `use_sim_time` is ros2-client's own: with it the node's clock (diagnostics stamps) is `/clock`.
+fn parameter_options(
+    shared: &Arc<Shared>,
+    settings: &crate::config::Settings,
+    use_sim_time: bool,
+) -> NodeOptions {
     let live = shared.clone();
     NodeOptions::new()
         .enable_rosout(false)
         .start_parameter_services(true)
+        .declare_parameter("use_sim_time", ParameterValue::Boolean(use_sim_time))
         .declare_parameter(
             "safety_coefficient",
             ParameterValue::Double(settings.safety_coefficient),
@@ -427,7 +466,13 @@ fn parameter_options(shared: &Arc<Shared>, settings: &crate::config::Settings) -
 /// The DDS-side tasks: keep the newest odometry and goal, post scans, answer the service,
 /// publish diagnostics, watch for rivals ([`Guard`]); returns when Ctrl-C was pressed, or when a
 /// rival found at start-up made the node refuse to run (the reason is in `Latest::refusal`).
-async fn serve(shared: &Arc<Shared>, ports: &Ports, node: &Node, guard: &Guard) {
+async fn serve(
+    shared: &Arc<Shared>,
+    ports: &Ports,
+    node: &Node,
+    guard: &Guard,
+    status: &StatusIdentity,
+) {
     let odometry = ports.odom.async_stream().for_each(|received| async move {
         match received {
             Ok((odom, _)) => shared.latest().odom = Some((odom, Instant::now())),
@@ -481,7 +526,9 @@ async fn serve(shared: &Arc<Shared>, ports: &Ports, node: &Node, guard: &Guard) 
         loop {
             smol::Timer::after(Duration::from_secs(1)).await;
             // Diagnostics are best effort: a full queue must not stop the node.
-            let _ = ports.diagnostics.publish(shared.diagnostics());
+            let _ = ports
+                .diagnostics
+                .publish(shared.diagnostics(status, stamp(node.time_now())));
         }
     };
     let rivals = async {
@@ -497,7 +544,7 @@ async fn serve(shared: &Arc<Shared>, ports: &Ports, node: &Node, guard: &Guard) 
                 }
                 Verdict::Warn(line) => {
                     if latest.rival.as_ref() != Some(&line) {
-                        eprintln!("cstep: warning: {line}");
+                        warn!("{line}");
                     }
                     latest.rival = Some(line);
                 }
@@ -608,6 +655,10 @@ fn score_scans(shared: &Shared, outputs: &Outputs) {
         };
         match shared.score(&query, shared.safety_coefficient(), with_markers) {
             Ok((e, r, markers)) => {
+                debug!(
+                    "scan {}.{:09}: empowerment {:.4} (valid: {}, {})",
+                    stamp.sec, stamp.nanosec, e.empowerment, e.valid, e.status
+                );
                 shared.scored(stamp, order);
                 // A full queue or a lost subscriber is not the node's failure; diagnostics show it.
                 if outputs.empowerment.publish(e).is_err() || outputs.reward.publish(r).is_err() {
@@ -864,7 +915,7 @@ impl Shared {
     }
 
     /// The once-a-second health report.
-    fn diagnostics(&self) -> DiagnosticArray {
+    fn diagnostics(&self, status: &StatusIdentity, stamp: Time) -> DiagnosticArray {
         let mut latest = self.latest();
         let age = |t: Option<Instant>| t.map(|t| t.elapsed().as_secs_f64());
         let odom_age = age(latest.odom.as_ref().map(|(_, t)| *t));
@@ -873,26 +924,26 @@ impl Shared {
         let jump = latest.time_jump.take();
         let (level, message) = if let Some(rival) = &latest.rival {
             (
-                2,
+                DiagnosticStatus::ERROR,
                 jump.map_or_else(|| rival.clone(), |jump| format!("{rival}; {jump}")),
             )
         } else if !fresh(odom_age) || !fresh(scan_age) {
             let stale = "inputs stale: no score";
             (
-                3,
+                DiagnosticStatus::STALE,
                 jump.map_or_else(|| stale.to_owned(), |jump| format!("{stale}; {jump}")),
             )
         } else if let Some(jump) = jump {
-            (1, jump)
+            (DiagnosticStatus::WARN, jump)
         } else if let Some(problem) = latest.last_problem.take() {
-            (1, problem)
+            (DiagnosticStatus::WARN, problem)
         } else if latest.last_scan_unwatched {
             (
-                0,
+                DiagnosticStatus::OK,
                 "no subscriber to the scores: scans not scored".to_owned(),
             )
         } else {
-            (0, "scoring".to_owned())
+            (DiagnosticStatus::OK, "scoring".to_owned())
         };
         let show = |a: Option<f64>| a.map_or("never".to_owned(), |a| format!("{a:.3}"));
         let (score, valid, elapsed) =
@@ -924,12 +975,15 @@ impl Shared {
             ("markers_published", latest.markers_published.to_string()),
         ];
         DiagnosticArray {
-            header: Header::default(),
+            header: Header {
+                stamp,
+                frame_id: String::new(),
+            },
             status: vec![DiagnosticStatus {
                 level,
-                name: "cstep: empowerment".into(),
+                name: status.name.clone(),
                 message,
-                hardware_id: "cstep".into(),
+                hardware_id: status.hardware_id.clone(),
                 values: values
                     .into_iter()
                     .map(|(key, value)| KeyValue {

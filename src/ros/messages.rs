@@ -482,11 +482,21 @@ pub struct MarkerArray {
     pub markers: Vec<Marker>,
 }
 
+/// `rosgraph_msgs/Clock`: the simulation time on `/clock` (ros2-client's own `/clock` reader
+/// expects `builtin_interfaces/Time`, a type rclcpp and rclpy never publish there).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct Clock {
+    /// The simulation time.
+    pub clock: Time,
+}
+
 /// Every type here travels over DDS with ros2-client.
 macro_rules! ros_messages {
     ($($t:ty),*) => { $(impl ros2_client::Message for $t {})* };
 }
 ros_messages!(
+    Clock,
     Odometry,
     LaserScan,
     PoseStamped,

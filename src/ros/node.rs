@@ -38,7 +38,7 @@ use super::convert::{
 use super::logging;
 use super::markers::rollout_markers;
 use super::messages::{
-    DiagnosticArray, DiagnosticStatus, EmpoweredReward, Empowerment, EvaluateBatchRequest,
+    Clock, DiagnosticArray, DiagnosticStatus, EmpoweredReward, Empowerment, EvaluateBatchRequest,
     EvaluateBatchResponse, EvaluateRequest, EvaluateResponse, Header, KeyValue, LaserScan,
     MarkerArray, Odometry, Point, PoseStamped, Time,
 };
@@ -124,7 +124,8 @@ pub fn run(config: &[PathBuf], ros_args: &RosArgs, stop: Arc<AtomicBool>) -> Res
     executor
         .spawn(node.spinner().map_err(|e| format!("{e:?}"))?.spin())
         .detach();
-    smol::block_on(executor.run(serve(&shared, &ports, &node, &guard, &status)));
+    let clock = NodeClock::new(interface.use_sim_time);
+    smol::block_on(executor.run(serve(&shared, &ports, &node, &guard, &status, &clock)));
     shared.stopping.store(true, Ordering::SeqCst);
     shared.arrived.notify_all();
     worker
@@ -193,6 +194,7 @@ struct Names {
     reward: String,
     markers: String,
     diagnostics: String,
+    clock: String,
     evaluate: String,
     evaluate_batch: String,
 }
@@ -216,6 +218,7 @@ impl Names {
             reward: topic(&interface.reward_topic)?,
             markers: topic(&interface.markers_topic)?,
             diagnostics: topic("/diagnostics")?,
+            clock: topic("/clock")?,
             evaluate: service(&interface.evaluate_service)?,
             evaluate_batch: service(&interface.evaluate_batch_service)?,
         })
@@ -230,12 +233,46 @@ struct StatusIdentity {
     hardware_id: String,
 }
 
-/// A ROS time as a message stamp.
-fn stamp(time: ros2_client::ROSTime) -> Time {
-    let nanos = time.to_nanos();
-    Time {
-        sec: nanos.div_euclid(1_000_000_000) as i32,
-        nanosec: nanos.rem_euclid(1_000_000_000) as u32,
+/// The node's clock, for the diagnostics' stamps: the system clock, or under `use_sim_time`
+/// the newest `/clock` (zero until one arrives, as in rclcpp).
+enum NodeClock {
+    /// The system clock.
+    Wall,
+    /// The newest `/clock` time.
+    Sim(Mutex<Time>),
+}
+
+impl NodeClock {
+    /// The clock `use_sim_time` asks for.
+    fn new(use_sim_time: bool) -> Self {
+        if use_sim_time {
+            NodeClock::Sim(Mutex::new(Time::default()))
+        } else {
+            NodeClock::Wall
+        }
+    }
+
+    /// Now, on this clock.
+    fn now(&self) -> Time {
+        match self {
+            NodeClock::Wall => {
+                let since_epoch = std::time::SystemTime::now()
+                    .duration_since(std::time::UNIX_EPOCH)
+                    .unwrap_or_default();
+                Time {
+                    sec: since_epoch.as_secs() as i32,
+                    nanosec: since_epoch.subsec_nanos(),
+                }
+            }
+            NodeClock::Sim(time) => *time.lock().unwrap_or_else(|e| e.into_inner()),
+        }
+    }
+
+    /// Takes a `/clock` message (ignored on the system clock).
+    fn tick(&self, clock: &Clock) {
+        if let NodeClock::Sim(time) = self {
+            *time.lock().unwrap_or_else(|e| e.into_inner()) = clock.clock;
+        }
     }
 }
 
@@ -326,6 +363,7 @@ struct Ports {
     odom: ros2_client::Subscription<Odometry>,
     scan: ros2_client::Subscription<LaserScan>,
     goal: ros2_client::Subscription<PoseStamped>,
+    clock: ros2_client::Subscription<Clock>,
     empowerment: Arc<Publisher<Empowerment>>,
     reward: Arc<Publisher<EmpoweredReward>>,
     markers: Arc<Publisher<MarkerArray>>,
@@ -353,6 +391,7 @@ impl Ports {
         let odom_topic = topic(&names.odom, "nav_msgs", "Odometry", &sensor)?;
         let scan_topic = topic(&names.scan, "sensor_msgs", "LaserScan", &sensor)?;
         let goal_topic = topic(&names.goal, "geometry_msgs", "PoseStamped", &reliable)?;
+        let clock_topic = topic(&names.clock, "rosgraph_msgs", "Clock", &sensor)?;
         let empowerment_topic = topic(&names.empowerment, "cstep_msgs", "Empowerment", &reliable)?;
         let reward_topic = topic(&names.reward, "cstep_msgs", "EmpoweredReward", &reliable)?;
         let markers_topic = topic(
@@ -381,6 +420,9 @@ impl Ports {
             scan: node
                 .create_subscription(&scan_topic, Some(sensor.clone()))
                 .map_err(failed("the scan subscription"))?,
+            clock: node
+                .create_subscription(&clock_topic, Some(sensor.clone()))
+                .map_err(failed("the /clock subscription"))?,
             goal: node
                 .create_subscription(&goal_topic, Some(reliable.clone()))
                 .map_err(failed("the goal subscription"))?,
@@ -428,7 +470,7 @@ fn failed<E: std::fmt::Debug>(what: &'static str) -> impl FnOnce(E) -> String {
 
 /// Declares the live parameter: a `safety_coefficient` change takes effect at the next score.
 /// The others are fixed for the node's life (they shape the control sample and the model).
-/// `use_sim_time` is ros2-client's own: with it the node's clock (diagnostics stamps) is `/clock`.
+/// `use_sim_time` is declared with its configured value, so the parameter services report it.
 fn parameter_options(
     shared: &Arc<Shared>,
     settings: &crate::config::Settings,
@@ -472,11 +514,18 @@ async fn serve(
     node: &Node,
     guard: &Guard,
     status: &StatusIdentity,
+    clock: &NodeClock,
 ) {
     let odometry = ports.odom.async_stream().for_each(|received| async move {
         match received {
             Ok((odom, _)) => shared.latest().odom = Some((odom, Instant::now())),
             Err(e) => shared.undecodable("odometry", "message", &e),
+        }
+    });
+    let clock_ticks = ports.clock.async_stream().for_each(|received| async move {
+        match received {
+            Ok((message, _)) => clock.tick(&message),
+            Err(e) => shared.undecodable("/clock", "message", &e),
         }
     });
     let goals = ports.goal.async_stream().for_each(|received| async move {
@@ -528,7 +577,7 @@ async fn serve(
             // Diagnostics are best effort: a full queue must not stop the node.
             let _ = ports
                 .diagnostics
-                .publish(shared.diagnostics(status, stamp(node.time_now())));
+                .publish(shared.diagnostics(status, clock.now()));
         }
     };
     let rivals = async {
@@ -559,6 +608,7 @@ async fn serve(
     futures::future::select_all([
         Box::pin(odometry) as std::pin::Pin<Box<dyn std::future::Future<Output = ()>>>,
         Box::pin(goals),
+        Box::pin(clock_ticks),
         Box::pin(scans),
         Box::pin(service),
         Box::pin(batch_service),

@@ -99,7 +99,7 @@ def diagnostics_of(proc, ros_context, executor, clock_sec: int | None = None) ->
         node.destroy_node()
 
 
-@pytest.mark.parametrize("use_sim_time", [False])
+@pytest.mark.parametrize("use_sim_time", [False, True])
 def test_diagnostics_are_named_for_the_node_and_stamped_with_its_clock(
     use_sim_time, ros_domain, ros_context, executor
 ):

@@ -13,9 +13,11 @@ use std::fmt;
 use std::time::{SystemTime, UNIX_EPOCH};
 
 use tracing::{Event, Level, Subscriber};
-use tracing_subscriber::filter::LevelFilter;
+use tracing_subscriber::filter::{LevelFilter, Targets};
 use tracing_subscriber::fmt::format::Writer;
+use tracing_subscriber::fmt::writer::BoxMakeWriter;
 use tracing_subscriber::fmt::{FmtContext, FormatEvent, FormatFields};
+use tracing_subscriber::layer::SubscriberExt;
 use tracing_subscriber::registry::LookupSpan;
 
 use super::args::{LogLevel, RosArgs};
@@ -73,17 +75,22 @@ pub fn init(args: &RosArgs, logger: &str) -> Result<(), String> {
     if args.stdout_logs == Some(false) {
         return Ok(());
     }
-    let builder = tracing_subscriber::fmt()
-        .with_max_level(filter(level_of(args, logger)))
+    let writer = if std::env::var("RCUTILS_LOGGING_USE_STDOUT").as_deref() == Ok("1") {
+        BoxMakeWriter::new(std::io::stdout)
+    } else {
+        BoxMakeWriter::new(std::io::stderr)
+    };
+    // Only cstep's own events: the libraries' `log` records (RustDDS, ros2-client) are not
+    // forwarded, as rcl leaves the middleware's own logging out of the node's console.
+    let subscriber = tracing_subscriber::fmt()
         .event_format(RcutilsFormat {
             logger: logger.to_owned(),
-        });
-    let started = if std::env::var("RCUTILS_LOGGING_USE_STDOUT").as_deref() == Ok("1") {
-        builder.with_writer(std::io::stdout).try_init()
-    } else {
-        builder.with_writer(std::io::stderr).try_init()
-    };
-    started.map_err(|e| format!("cannot start the log: {e}"))?;
+        })
+        .with_writer(writer)
+        .finish()
+        .with(Targets::new().with_target("cstep", filter(level_of(args, logger))));
+    tracing::subscriber::set_global_default(subscriber)
+        .map_err(|e| format!("cannot start the log: {e}"))?;
     if let Some(file) = &args.log_config_file {
         tracing::warn!(
             "--log-config-file {} ignored: cstep logs to the console only",

@@ -49,6 +49,8 @@ def log_of(ros_domain: int, *ros_args: str, tag: str) -> str:
 def test_log_level_debug_adds_debug_lines_that_the_default_leaves_out(ros_domain):
     default = log_of(ros_domain, tag="default")
     assert "[DEBUG]" not in default
+    # Only the node's own lines: none of RustDDS's or ros2-client's internal records.
+    assert "UDPListener" not in default and "Creating topic" not in default, default
     # rcutils' format, and the node's logger named as rcl names it.
     assert "[INFO] [" in default and "] [cstep_node]: cstep node /cstep_node on" in default
 

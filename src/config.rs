@@ -89,6 +89,19 @@ impl ParameterSet {
         Ok(())
     }
 
+    /// Sets `name` to `value`, read from `source` (a file, whose directory `base_dir` relative
+    /// paths are relative to, or the command line): for overrides gathered elsewhere, such as
+    /// the node's `--ros-args` ([`crate::ros::param_overrides`]).
+    pub fn insert(&mut self, name: &str, value: Value, source: &str, base_dir: Option<&Path>) {
+        let value = if name == "robot_description" {
+            resolve_path(value, base_dir)
+        } else {
+            value
+        };
+        self.values
+            .insert(name.to_owned(), (value, source.to_owned()));
+    }
+
     /// Reads a `ros__parameters` file's section for `node_name` (or the `/**` wildcard) into the
     /// set; nested maps become dotted names as in ROS 2.
     fn merge_yaml(
@@ -211,7 +224,8 @@ impl ParameterSet {
 /// The marker path the built-in config uses for the compiled-in URDF.
 pub const BUILTIN_URDF_PATH: &str = "builtin:cf2x.urdf";
 
-fn flatten(prefix: &str, mapping: &serde_norway::Mapping, out: &mut Vec<(String, Value)>) {
+/// Nested parameter maps as dotted names (`limits: {speed: 2}` is `limits.speed`), as in ROS 2.
+pub fn flatten(prefix: &str, mapping: &serde_norway::Mapping, out: &mut Vec<(String, Value)>) {
     for (key, value) in mapping {
         let key = match key {
             Value::String(s) => s.clone(),
@@ -591,6 +605,12 @@ pub fn load_all(
     for assignment in overrides {
         set.assign(assignment)?;
     }
+    validate(set)
+}
+
+/// Validates a complete parameter set (the built-in defaults with overrides applied) into the
+/// settings; rejects unknown names.
+pub fn validate(mut set: ParameterSet) -> Result<(Settings, NodeSettings), ConfigError> {
     let node = NodeSettings::take_from(&mut set)?;
     let settings = Settings::take_from(&mut set)?;
     let known: Vec<&str> = SETTINGS_PARAMETERS

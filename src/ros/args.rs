@@ -536,7 +536,8 @@ mod tests {
             ("~/debug", "/drone1", "/drone1/cstep_node/debug"),
             ("~", "/", "/cstep_node"),
             ("{node}/out", "/a/b", "/a/b/cstep_node/out"),
-            ("/{ns}/x", "/", "/x"),
+            ("{ns}/x", "/", "/x"),
+            ("{namespace}/x", "/a", "/a/x"),
         ] {
             assert_eq!(expand(name, "cstep_node", ns).unwrap(), expected, "{name}");
         }

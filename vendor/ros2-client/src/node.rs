@@ -569,6 +569,7 @@ impl Node {
     // Returns `Err` if some declared parameter does not validate.
     let parameters = ParameterStore::new(
       options.declared_parameters.clone(),
+      options.parameter_descriptors.clone(), // cstep patch
       options.allow_undeclared_parameters,
       options.parameter_validator.take(),
       options.parameter_set_action.take(),

@@ -12,7 +12,7 @@
 //! `src/zenoh_backend/node.rs`). Fields not honored by a backend are
 //! documented as no-ops there (logged once at `debug` level).
 
-use crate::parameters::{Parameter, ParameterValue, SetParametersResult};
+use crate::parameters::{Parameter, ParameterDescriptor, ParameterValue, SetParametersResult};
 
 /// Signature of a user-supplied parameter validator / set-action callback
 /// (see [`NodeOptions::parameter_validator`] /
@@ -34,6 +34,8 @@ pub struct NodeOptions {
   pub(crate) enable_rosout_reading: bool,
   pub(crate) start_parameter_services: bool,
   pub(crate) declared_parameters: Vec<Parameter>,
+  // cstep patch: descriptors of declared parameters (declare_parameter_with_descriptor).
+  pub(crate) parameter_descriptors: Vec<ParameterDescriptor>,
   pub(crate) allow_undeclared_parameters: bool,
   pub(crate) parameter_validator: Option<Box<ParameterFunc>>,
   pub(crate) parameter_set_action: Option<Box<ParameterFunc>>,
@@ -49,6 +51,7 @@ impl NodeOptions {
       enable_rosout_reading: false,
       start_parameter_services: true,
       declared_parameters: Vec::new(),
+      parameter_descriptors: Vec::new(),
       allow_undeclared_parameters: false,
       parameter_validator: None,
       parameter_set_action: None,
@@ -92,6 +95,26 @@ impl NodeOptions {
       value,
     });
     // TODO: check for duplicate parameter names
+    self
+  }
+
+  /// Declares the parameter `descriptor.name` with `value` and its
+  /// descriptor, as rclcpp's `declare_parameter(name, value, descriptor)`:
+  /// `describe_parameters` answers the descriptor (description, constraints,
+  /// ranges, `read_only`) instead of one made up from the value; a
+  /// `read_only` parameter refuses every set with a reason; a value outside
+  /// its range is refused, at declaration too.
+  // cstep patch: ros2-client 0.12.1 could not express descriptors.
+  pub fn declare_parameter_with_descriptor(
+    mut self,
+    value: ParameterValue,
+    descriptor: ParameterDescriptor,
+  ) -> NodeOptions {
+    self.declared_parameters.push(Parameter {
+      name: descriptor.name.clone(),
+      value,
+    });
+    self.parameter_descriptors.push(descriptor);
     self
   }
 

@@ -198,6 +198,10 @@ impl From<SetParametersResult> for raw::SetParametersResult {
 }
 
 /// Documentation and constraints for a [`Parameter`]
+// cstep patch: Debug and Clone, so a node can keep the descriptors it was
+// given (NodeOptions::declare_parameter_with_descriptor) and answer
+// describe_parameters from them.
+#[derive(Debug, Clone)]
 pub struct ParameterDescriptor {
   pub name: String,
   pub param_type: ParameterType, // ParameterType.msg defines enum
@@ -237,6 +241,7 @@ impl ParameterDescriptor {
 }
 
 /// Optional Limits for a numeric [`Parameter`]
+#[derive(Debug, Clone, PartialEq)] // cstep patch: kept with its descriptor
 pub enum NumericRange {
   NotSpecified,
   IntegerRange {
@@ -249,6 +254,60 @@ pub enum NumericRange {
     to_value: f64,
     step: f64,
   },
+}
+
+impl NumericRange {
+  /// Whether `value` lies in the range, as rclcpp checks it: the bounds are
+  /// inclusive (within a small tolerance for doubles), a non-zero `step`
+  /// admits only `from_value + k * step` and the upper bound, and a value of
+  /// another type than the range's is not checked here (the type rule is).
+  // cstep patch: ranges are enforced on every set, as in rclcpp and rclpy.
+  pub fn check(&self, name: &str, value: &ParameterValue) -> SetParametersResult {
+    match (self, value) {
+      (
+        NumericRange::IntegerRange {
+          from_value,
+          to_value,
+          step,
+        },
+        ParameterValue::Integer(v),
+      ) => {
+        let outside = v < from_value || v > to_value;
+        let off_step = *step != 0 && v != to_value && (v - from_value) % step != 0;
+        if outside || off_step {
+          return Err(format!(
+            "Parameter {{{name}}} doesn't comply with integer range."
+          ));
+        }
+        Ok(())
+      }
+      (
+        NumericRange::FloatingPointRange {
+          from_value,
+          to_value,
+          step,
+        },
+        ParameterValue::Double(v),
+      ) => {
+        let near = |a: f64, b: f64| (a - b).abs() <= f64::EPSILON * 100.0 * a.abs().max(b.abs());
+        if near(*v, *from_value) || near(*v, *to_value) {
+          return Ok(());
+        }
+        let outside = *v < *from_value || *v > *to_value;
+        let off_step = *step != 0.0 && {
+          let k = ((v - from_value) / step).round();
+          !near(*v, from_value + k * step)
+        };
+        if outside || off_step {
+          return Err(format!(
+            "Parameter {{{name}}} doesn't comply with floating point range."
+          ));
+        }
+        Ok(())
+      }
+      _ => Ok(()),
+    }
+  }
 }
 
 impl From<ParameterDescriptor> for raw::ParameterDescriptor {
@@ -346,6 +405,9 @@ impl ParameterChanges {
 /// [`ParameterChanges`] the caller should publish as a `ParameterEvent`.
 pub(crate) struct ParameterStore {
   values: Mutex<BTreeMap<String, ParameterValue>>,
+  // cstep patch: the descriptors given at declaration, by name; parameters
+  // without one are described from their value as before.
+  descriptors: BTreeMap<String, ParameterDescriptor>,
   allow_undeclared: bool,
   // Not held at the same time as `values`, as the callbacks may be slow.
   validator: Option<Mutex<Box<ParameterFunc>>>,
@@ -359,10 +421,12 @@ impl ParameterStore {
 
   /// Create a store holding `declared` plus `use_sim_time` (default `false`).
   ///
-  /// Each declared value is validated and its set action run; the first
+  /// Each declared value is validated (against its descriptor's range too,
+  /// if `descriptors` has one for it) and its set action run; the first
   /// failure is returned.
   pub fn new(
     declared: impl IntoIterator<Item = Parameter>,
+    descriptors: impl IntoIterator<Item = ParameterDescriptor>,
     allow_undeclared: bool,
     validator: Option<Box<ParameterFunc>>,
     set_action: Option<Box<ParameterFunc>>,
@@ -380,6 +444,10 @@ impl ParameterStore {
 
     let store = ParameterStore {
       values: Mutex::new(values),
+      descriptors: descriptors
+        .into_iter()
+        .map(|d| (d.name.clone(), d))
+        .collect(),
       allow_undeclared,
       validator: validator.map(Mutex::new),
       set_action: set_action.map(Mutex::new),
@@ -428,9 +496,10 @@ impl ParameterStore {
     let values = self.values.lock().unwrap();
     names
       .iter()
-      .map(|name| match values.get(name) {
-        Some(value) => ParameterDescriptor::from_value(name, value),
-        None => ParameterDescriptor::unknown(name),
+      .map(|name| match (values.get(name), self.descriptors.get(name)) {
+        (Some(_), Some(descriptor)) => descriptor.clone(),
+        (Some(value), None) => ParameterDescriptor::from_value(name, value),
+        (None, _) => ParameterDescriptor::unknown(name),
       })
       .collect()
   }
@@ -520,6 +589,13 @@ impl ParameterStore {
         "Setting undeclared parameter '{name}' is not allowed."
       ));
     }
+    // cstep patch: a read-only parameter keeps its declared value (rclcpp's
+    // check and wording).
+    if self.descriptors.get(name).is_some_and(|d| d.read_only) {
+      return Err(format!(
+        "parameter '{name}' cannot be set because it is read-only"
+      ));
+    }
     if !self.allow_undeclared
       && !matches!(value, ParameterValue::NotSet)
       && let Some(existing) = &existing
@@ -535,13 +611,17 @@ impl ParameterStore {
     self.check_value(name, value)
   }
 
-  /// The built-in `use_sim_time` check, or else the user validator.
+  /// The built-in `use_sim_time` check, or else the descriptor's range and
+  /// the user validator.
   fn check_value(&self, name: &str, value: &ParameterValue) -> SetParametersResult {
     if name == Self::USE_SIM_TIME {
       return match value {
         ParameterValue::Boolean(_) => Ok(()),
         _ => Err(format!("Parameter '{name}' must be Boolean.")),
       };
+    }
+    if let Some(descriptor) = self.descriptors.get(name) {
+      descriptor.range.check(name, value)?;
     }
     match &self.validator {
       Some(v) => v.lock().unwrap()(name, value),
@@ -708,6 +788,7 @@ mod tests {
   fn store(allow_undeclared: bool) -> ParameterStore {
     ParameterStore::new(
       vec![param("p", ParameterValue::Integer(1))],
+      vec![],
       allow_undeclared,
       None,
       None,
@@ -733,6 +814,7 @@ mod tests {
   fn declared_use_sim_time_is_kept() {
     let s = ParameterStore::new(
       vec![param("use_sim_time", ParameterValue::Boolean(true))],
+      vec![],
       false,
       None,
       None,
@@ -791,6 +873,7 @@ mod tests {
     let applied_in_action = Arc::clone(&applied);
     let s = ParameterStore::new(
       vec![param("rate", ParameterValue::Integer(1))],
+      vec![],
       false,
       Some(Box::new(|_name, value| match value {
         ParameterValue::Integer(i) if *i <= 0 => Err("must be positive".to_string()),
@@ -812,6 +895,7 @@ mod tests {
   fn declared_values_are_validated() {
     let result = ParameterStore::new(
       vec![param("rate", ParameterValue::Integer(0))],
+      vec![],
       false,
       Some(Box::new(|_name, _value| Err("no".to_string()))),
       None,
@@ -825,6 +909,7 @@ mod tests {
       ["a", "a.b", "a.b.c", "ab", "x.y"]
         .iter()
         .map(|n| param(n, ParameterValue::Integer(0))),
+      vec![],
       false,
       None,
       None,
@@ -850,5 +935,88 @@ mod tests {
     // The separator after the prefix counts towards depth.
     assert_eq!(names(&["a"], 1).names, ["a"]);
     assert_eq!(names(&["a"], 2).names, ["a", "a.b"]);
+  }
+
+  // cstep patch: descriptors given at declaration.
+  fn described_store() -> ParameterStore {
+    use super::{NumericRange, ParameterDescriptor, ParameterType};
+    let descriptor = |name: &str, read_only, range| ParameterDescriptor {
+      name: name.to_string(),
+      param_type: ParameterType::Integer,
+      description: format!("{name}, described"),
+      additional_constraints: String::new(),
+      read_only,
+      dynamic_typing: false,
+      range,
+    };
+    ParameterStore::new(
+      vec![
+        param("fixed", ParameterValue::Integer(3)),
+        param("live", ParameterValue::Integer(4)),
+        param("plain", ParameterValue::Integer(5)),
+      ],
+      vec![
+        descriptor("fixed", true, NumericRange::NotSpecified),
+        descriptor(
+          "live",
+          false,
+          NumericRange::IntegerRange {
+            from_value: 0,
+            to_value: 10,
+            step: 2,
+          },
+        ),
+      ],
+      false,
+      None,
+      None,
+    )
+    .unwrap()
+  }
+
+  #[test]
+  fn describe_answers_the_declared_descriptor() {
+    let s = described_store();
+    let names: Vec<String> = ["fixed", "plain", "nothing"].map(String::from).to_vec();
+    let described = s.describe(&names);
+    assert_eq!(described[0].description, "fixed, described");
+    assert!(described[0].read_only);
+    assert_eq!(
+      described[1].description,
+      "(description missing, not implemented)"
+    );
+    assert_eq!(described[2].description, "unknown parameter");
+  }
+
+  #[test]
+  fn read_only_parameters_refuse_sets_with_a_reason() {
+    let s = described_store();
+    let refused = s.set("fixed", ParameterValue::Integer(9)).unwrap_err();
+    assert_eq!(
+      refused,
+      "parameter 'fixed' cannot be set because it is read-only"
+    );
+    assert_eq!(s.get("fixed"), Some(ParameterValue::Integer(3)));
+    assert!(s.set("plain", ParameterValue::Integer(9)).is_ok());
+  }
+
+  #[test]
+  fn ranges_are_enforced_as_rclcpp_does() {
+    let s = described_store();
+    assert!(s.set("live", ParameterValue::Integer(6)).is_ok());
+    assert!(s.set("live", ParameterValue::Integer(10)).is_ok());
+    for bad in [-2, 7, 12] {
+      let refused = s.set("live", ParameterValue::Integer(bad)).unwrap_err();
+      assert_eq!(refused, "Parameter {live} doesn't comply with integer range.");
+    }
+    assert_eq!(s.get("live"), Some(ParameterValue::Integer(10)));
+    let range = super::NumericRange::FloatingPointRange {
+      from_value: 0.0,
+      to_value: f64::INFINITY,
+      step: 0.0,
+    };
+    assert!(range.check("c", &ParameterValue::Double(0.5)).is_ok());
+    assert!(range.check("c", &ParameterValue::Double(1e300)).is_ok());
+    assert!(range.check("c", &ParameterValue::Double(-0.1)).is_err());
   }
 }

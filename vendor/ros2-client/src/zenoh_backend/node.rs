@@ -135,6 +135,7 @@ impl Node {
     if options.start_parameter_services {
       let store = ParameterStore::new(
         std::mem::take(&mut options.declared_parameters),
+        std::mem::take(&mut options.parameter_descriptors), // cstep patch
         options.allow_undeclared_parameters,
         options.parameter_validator.take(),
         options.parameter_set_action.take(),
@@ -500,7 +501,7 @@ impl Node {
     initial_parameters: impl IntoIterator<Item = Parameter>,
   ) -> CreateResult<ParameterServer> {
     let store =
-      ParameterStore::new(initial_parameters, false, None, None).map_err(bad_parameter)?;
+      ParameterStore::new(initial_parameters, [], false, None, None).map_err(bad_parameter)?;
     self.parameter_server_with_store(store)
   }
 

@@ -12,6 +12,7 @@ pub mod echo;
 pub mod markers;
 pub mod messages;
 pub mod node;
+pub mod parameters;
 pub mod rivals;
 pub mod stamps;
 pub mod yaml;

@@ -25,8 +25,8 @@ use rayon::prelude::*;
 use ros2_client::dds::rustdds::RTPSEntity;
 use ros2_client::qos::{Durability, History, WhenFull};
 use ros2_client::{
-    Message, MessageTypeName, Name, Node, NodeName, NodeOptions, ParameterValue, Publisher,
-    QosProfile, Server, ServiceMapping, ServiceTypeName,
+    Message, MessageTypeName, Name, Node, NodeName, NodeOptions, Publisher, QosProfile, Server,
+    ServiceMapping, ServiceTypeName,
 };
 
 use super::args::RosArgs;
@@ -42,8 +42,9 @@ use super::messages::{
 };
 use super::rivals::{self, Claims, Verdict};
 use super::stamps::{Order, StampOrder};
-use crate::config::{load_all, NodeSettings, DEFAULT_NODE_NAME};
+use crate::config::{load_all, NodeSettings, Parameters, DEFAULT_NODE_NAME};
 use crate::estimator::{Estimator, EMPOWERMENT_FLOOR};
+use crate::parameters::Value;
 use crate::reward::{empowered_reward, floor_reward, task_reward};
 
 /// Runs the node until `stop` is set: loads the parameters files and `--ros-args`, joins the
@@ -57,7 +58,7 @@ pub fn run(config: &[PathBuf], ros_args: &RosArgs, stop: Arc<AtomicBool>) -> Res
         .chain(&ros_args.params_files)
         .map(PathBuf::as_path)
         .collect();
-    let (settings, interface) =
+    let (settings, interface, parameters) =
         load_all(&paths, node_name, &ros_args.params).map_err(|e| e.to_string())?;
     let estimator = Estimator::from_settings(&settings).map_err(|e| e.to_string())?;
     let shared = Arc::new(Shared::new(
@@ -70,7 +71,7 @@ pub fn run(config: &[PathBuf], ros_args: &RosArgs, stop: Arc<AtomicBool>) -> Res
 
     let context = context_from_env(true)?;
     let namespace = ros_args.namespace.as_deref().unwrap_or("/");
-    let options = parameter_options(&shared, &settings);
+    let options = parameter_options(&shared, &parameters);
     let mut node = context
         .new_node(
             NodeName::new(namespace, node_name).map_err(|e| format!("node name: {e:?}"))?,
@@ -339,35 +340,22 @@ fn failed<E: std::fmt::Debug>(what: &'static str) -> impl FnOnce(E) -> String {
     move |e| format!("cannot create {what}: {e:?}")
 }
 
-/// Declares the live parameter: a `safety_coefficient` change takes effect at the next score.
-/// The others are fixed for the node's life (they shape the control sample and the model).
-fn parameter_options(shared: &Arc<Shared>, settings: &crate::config::Settings) -> NodeOptions {
+/// Declares every parameter ([`super::parameters`]); a `safety_coefficient` change takes effect
+/// at the next score. The others are read-only (they shape the control sample, the model and
+/// the topics), but `use_sim_time`, which ros2-client applies to its clock itself.
+fn parameter_options(shared: &Arc<Shared>, parameters: &Parameters) -> NodeOptions {
     let live = shared.clone();
-    NodeOptions::new()
+    let options = NodeOptions::new()
         .enable_rosout(false)
-        .start_parameter_services(true)
-        .declare_parameter(
-            "safety_coefficient",
-            ParameterValue::Double(settings.safety_coefficient),
-        )
-        .parameter_validator(Box::new(|name, value| match (name, value) {
-            ("safety_coefficient", ParameterValue::Double(c)) if c.is_finite() && *c > 0.0 => {
-                Ok(())
-            }
-            ("safety_coefficient", other) => Err(format!(
-                "safety_coefficient must be a positive double, got {other:?}"
-            )),
-            (other, _) => Err(format!("'{other}' cannot be changed while the node runs")),
-        }))
-        .parameter_set_action(Box::new(move |name, value| {
-            if let ("safety_coefficient", ParameterValue::Double(c)) = (name, value) {
-                *live
-                    .safety_coefficient
-                    .lock()
-                    .unwrap_or_else(|e| e.into_inner()) = *c;
-            }
-            Ok(())
-        }))
+        .start_parameter_services(true);
+    super::parameters::declare(options, parameters, move |p, value| {
+        if let ("safety_coefficient", Value::Double(c)) = (p.name, value) {
+            *live
+                .safety_coefficient
+                .lock()
+                .unwrap_or_else(|e| e.into_inner()) = *c;
+        }
+    })
 }
 
 /// The DDS-side tasks: keep the newest odometry and goal, post scans, answer the service,

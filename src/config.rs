@@ -86,6 +86,19 @@ impl ParameterSet {
         Ok(())
     }
 
+    /// Sets `name` to `value`, read from `source` (a file, whose directory `base_dir` relative
+    /// paths are relative to, or the command line): for overrides gathered elsewhere, such as
+    /// the node's `--ros-args` ([`crate::ros::param_overrides`]).
+    pub fn insert(&mut self, name: &str, value: Value, source: &str, base_dir: Option<&Path>) {
+        let value = if name == "robot_description" {
+            resolve_path(value, base_dir)
+        } else {
+            value
+        };
+        self.values
+            .insert(name.to_owned(), (value, source.to_owned()));
+    }
+
     /// Reads a `ros__parameters` file's section for `node_name` (or the `/**` wildcard) into the
     /// set; nested maps become dotted names as in ROS 2.
     fn merge_yaml(
@@ -237,7 +250,8 @@ impl Parameters {
     }
 }
 
-fn flatten(prefix: &str, mapping: &serde_norway::Mapping, out: &mut Vec<(String, Value)>) {
+/// Nested parameter maps as dotted names (`limits: {speed: 2}` is `limits.speed`), as in ROS 2.
+pub fn flatten(prefix: &str, mapping: &serde_norway::Mapping, out: &mut Vec<(String, Value)>) {
     for (key, value) in mapping {
         let key = match key {
             Value::String(s) => s.clone(),
@@ -482,9 +496,7 @@ impl NodeSettings {
 }
 
 /// Loads the built-in defaults, then each parameters file in order, then the `-p` overrides,
-/// for node `node_name`; checks every value against [`PARAMETERS`], rejects unknown names, and
-/// reads the evaluation's and the node's settings. The checked values come back too: the node
-/// declares them.
+/// for node `node_name`, and checks them with [`validate`].
 pub fn load_all(
     paths: &[&Path],
     node_name: &str,
@@ -497,6 +509,15 @@ pub fn load_all(
     for assignment in overrides {
         set.assign(assignment)?;
     }
+    validate(set)
+}
+
+/// Checks a complete parameter set (the built-in defaults with files and overrides applied,
+/// however they were gathered: [`load_all`] here, the node's `--ros-args` in
+/// [`crate::ros::param_overrides`]) against [`PARAMETERS`], rejects unknown names, and reads the
+/// evaluation's and the node's settings. The checked values come back too: the node declares
+/// them.
+pub fn validate(set: ParameterSet) -> Result<(Settings, NodeSettings, Parameters), ConfigError> {
     let parameters = set.check()?;
     let settings = Settings::from_parameters(&parameters)?;
     let node = NodeSettings::from_parameters(&parameters);

@@ -122,6 +122,14 @@ pub struct Estimator {
     controls: Mutex<Option<(u64, Arc<Controls>)>>,
 }
 
+/// The robot description the configuration names (the built-in Crazyflie or a URDF file).
+pub fn robot_description(settings: &Settings) -> Result<RobotDescription, UrdfError> {
+    match &settings.robot_description {
+        RobotSource::Builtin => RobotDescription::from_str(BUILTIN_URDF, "built-in cf2x.urdf"),
+        RobotSource::File(path) => RobotDescription::load(path),
+    }
+}
+
 impl Estimator {
     /// An estimator for `model` with `settings`.
     pub fn new(model: Box<dyn Dynamics>, settings: EstimatorSettings) -> Self {
@@ -134,10 +142,7 @@ impl Estimator {
 
     /// Builds the model the configuration names (loading its URDF) and the estimator around it.
     pub fn from_settings(settings: &Settings) -> Result<Self, UrdfError> {
-        let description = match &settings.robot_description {
-            RobotSource::Builtin => RobotDescription::from_str(BUILTIN_URDF, "built-in cf2x.urdf")?,
-            RobotSource::File(path) => RobotDescription::load(path)?,
-        };
+        let description = robot_description(settings)?;
         let model: Box<dyn Dynamics> = match settings.model {
             ModelKind::Quadrotor => {
                 Box::new(Quadrotor::new(&description, settings.max_acceleration))

@@ -318,7 +318,7 @@ pub const PARAMETERS: &[Parameter] = &[
     Parameter {
         name: "empowerment_topic",
         rule: Rule::RosName,
-        default: "/cstep/empowerment",
+        default: "cstep/empowerment",
         unit: None,
         description: "cstep_msgs/Empowerment output.",
         change: Change::ReadOnly,
@@ -326,7 +326,7 @@ pub const PARAMETERS: &[Parameter] = &[
     Parameter {
         name: "reward_topic",
         rule: Rule::RosName,
-        default: "/cstep/reward",
+        default: "cstep/reward",
         unit: None,
         description: "cstep_msgs/EmpoweredReward output.",
         change: Change::ReadOnly,
@@ -334,7 +334,7 @@ pub const PARAMETERS: &[Parameter] = &[
     Parameter {
         name: "markers_topic",
         rule: Rule::RosName,
-        default: "/cstep/markers",
+        default: "cstep/markers",
         unit: None,
         description: "visualization_msgs/MarkerArray of the sampled endpoints and their hull, \
             in the odometry frame; built and published only while someone subscribes.",
@@ -343,7 +343,7 @@ pub const PARAMETERS: &[Parameter] = &[
     Parameter {
         name: "evaluate_service",
         rule: Rule::RosName,
-        default: "/cstep/evaluate",
+        default: "cstep/evaluate",
         unit: None,
         description: "cstep_msgs/srv/Evaluate: one state in, its score out, synchronously.",
         change: Change::ReadOnly,
@@ -351,7 +351,7 @@ pub const PARAMETERS: &[Parameter] = &[
     Parameter {
         name: "evaluate_batch_service",
         rule: Rule::RosName,
-        default: "/cstep/evaluate_batch",
+        default: "cstep/evaluate_batch",
         unit: None,
         description: "cstep_msgs/srv/EvaluateBatch: K states per call, scored in parallel; one \
             round trip per vector step for RL loops with several simulations.",
@@ -381,8 +381,8 @@ pub const PARAMETERS: &[Parameter] = &[
         rule: Rule::Bool,
         default: "false",
         unit: None,
-        description: "Use the /clock topic's time for the node's clock (simulation). Scores \
-            carry their scan's stamp either way.",
+        description: "Use the /clock topic's time for the node's clock (simulation), which \
+            stamps the diagnostics. Scores carry their scan's stamp either way.",
         change: Change::Live,
     },
 ];

@@ -44,6 +44,17 @@ from .world import LIDAR_BEAMS, LIDAR_RANGE, clipped_ranges
 MAX_TILT = 0.9
 EPISODE_SECONDS = 30.0
 REWARD_MODES = ("service", "topic", "deferred")
+# How the envs can be drawn: a PyBullet window, or frames returned by ``render()``.
+RENDER_MODES = ["human", "rgb_array"]
+
+
+def checked_render_mode(render_mode: str | None) -> str | None:
+    """``render_mode`` if the envs know it; a clear error otherwise."""
+    if render_mode not in (None, *RENDER_MODES):
+        raise ValueError(f"render_mode must be one of {RENDER_MODES} or None, got {render_mode!r}")
+    return render_mode
+
+
 """How an empowered env gets its reward (see the module docstring)."""
 REWARD_REQUEST = "cstep_reward_request"
 """The ``info`` key of a deferred env's :class:`RewardRequest`."""
@@ -229,6 +240,13 @@ class EmpoweredRewardEnv(gym.Env):
         answer = self.bridge.evaluate(state, ranges, t, in_collision=request.in_collision)
         return request.finish(answer, info)
 
+    def render(self) -> np.ndarray | None:
+        """``rgb_array``: the world seen from above as an RGB frame (height, width, 3), e.g. for
+        gymnasium's ``RecordVideo``; ``human``: the PyBullet window draws itself, so None."""
+        if self.render_mode == "rgb_array":
+            return self.sim.camera_image()
+        return None
+
     def close(self) -> None:
         """Stops this env's own bridge and node, if it started them."""
         if self._own_bridge is not None:
@@ -239,7 +257,7 @@ class EmpoweredRewardEnv(gym.Env):
 class CStepDroneEnv(EmpoweredRewardEnv):
     """The drone arena with the plain navigation reward or the C-STEP empowered reward."""
 
-    metadata: ClassVar[dict] = {"render_modes": ["human"], "render_fps": CONTROL_HZ}
+    metadata: ClassVar[dict] = {"render_modes": RENDER_MODES, "render_fps": CONTROL_HZ}
 
     def __init__(
         self,
@@ -275,7 +293,7 @@ class CStepDroneEnv(EmpoweredRewardEnv):
         self.max_steps = round(episode_seconds * CONTROL_HZ)
         self.success_radius = success_radius
         self.fixed_arena = arena
-        self.render_mode = render_mode
+        self.render_mode = checked_render_mode(render_mode)
         self.sim = DroneSim(arena or Arena(), gui=render_mode == "human")
         self.robot_radius = self.sim.params.radius
         high = np.concatenate(

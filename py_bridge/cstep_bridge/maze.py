@@ -52,7 +52,7 @@ import pybullet as p
 from gymnasium import spaces
 
 from .curriculum import partway_goal
-from .env import EmpoweredRewardEnv
+from .env import RENDER_MODES, EmpoweredRewardEnv, checked_render_mode
 from .sim import CONTROL_HZ, STEPS_PER_CONTROL, DroneState
 from .world import (
     LIDAR_BEAMS,
@@ -286,7 +286,7 @@ class MazeSim(PhysicsWorld):
 class CStepMazeEnv(EmpoweredRewardEnv):
     """The point maze with the plain navigation reward or the C-STEP empowered reward."""
 
-    metadata: ClassVar[dict] = {"render_modes": ["human"], "render_fps": CONTROL_HZ}
+    metadata: ClassVar[dict] = {"render_modes": RENDER_MODES, "render_fps": CONTROL_HZ}
 
     def __init__(
         self,
@@ -321,7 +321,7 @@ class CStepMazeEnv(EmpoweredRewardEnv):
         self.max_steps = episode_steps
         self.success_radius = success_radius
         self.fixed_config = config
-        self.render_mode = render_mode
+        self.render_mode = checked_render_mode(render_mode)
         self.sim = MazeSim(gui=render_mode == "human")
         self.robot_radius = BALL_RADIUS
         high = np.array([10.0, 10.0, 20.0, 20.0])

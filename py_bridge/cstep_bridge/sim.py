@@ -281,6 +281,7 @@ class DroneSim(PhysicsWorld):
         bx0, by0, bx1, by1 = a.block
         block = self.add_box((bx0, by0, 0), (bx1, by1, h), (0.8, 0.3, 0.2, 1))
         self.static = [floor, ceiling]
+        self.view_ceiling = h
         self.obstacles = [*walls, block]
         self.block_id = block
         self.drone = p.loadURDF(

@@ -21,6 +21,11 @@ LIDAR_ANGLE_MIN = -math.pi
 LIDAR_ANGLE_INCREMENT = 2 * math.pi / LIDAR_BEAMS
 
 PHYSICS_HZ = 240
+
+# Frames for ``render_mode="rgb_array"``: size (width, height) in pixels and the camera's field
+# of view (degrees).
+RENDER_SIZE = (480, 480)
+RENDER_FOV_DEG = 60.0
 """Physics steps per second in every world (the paper's 240 Hz)."""
 
 Rect = tuple[float, float, float, float]
@@ -99,6 +104,9 @@ class PhysicsWorld:
         self.client = p.connect(p.GUI if gui else p.DIRECT)
         self.physics_steps = 0
         self.boxes = np.zeros((0, 6))
+        # What the overhead camera (:meth:`camera_image`) cuts away: everything above this
+        # height, such as a ceiling that would hide the world (m).
+        self.view_ceiling = math.inf
 
     def add_box(
         self,
@@ -121,6 +129,37 @@ class PhysicsWorld:
         p.setTimeStep(1.0 / PHYSICS_HZ, physicsClientId=self.client)
         self.physics_steps = 0
         self.boxes = np.zeros((0, 6))
+
+    def camera_image(self) -> np.ndarray:
+        """The world seen from straight above, framing every box below :attr:`view_ceiling`: an
+        RGB frame (height, width, 3) of uint8, for ``render_mode="rgb_array"`` (videos). PyBullet's
+        software renderer draws it, so no display is needed."""
+        width, height = RENDER_SIZE
+        below = self.boxes[self.boxes[:, 2] < self.view_ceiling]
+        lo, hi = below[:, :2].min(axis=0), below[:, 3:5].max(axis=0)
+        centre = (lo + hi) / 2
+        half_extent = max(hi - lo) / 2
+        top = min(below[:, 5].max(), self.view_ceiling)
+        eye = top + half_extent / math.tan(math.radians(RENDER_FOV_DEG / 2))
+        # The near plane at the view ceiling clips whatever lies above it.
+        near = max(eye - self.view_ceiling, 0.01)
+        view = p.computeViewMatrix(
+            cameraEyePosition=[centre[0], centre[1], eye],
+            cameraTargetPosition=[centre[0], centre[1], 0.0],
+            cameraUpVector=[0.0, 1.0, 0.0],
+        )
+        projection = p.computeProjectionMatrixFOV(
+            fov=RENDER_FOV_DEG, aspect=width / height, nearVal=near, farVal=eye + 1.0
+        )
+        _, _, rgba, _, _ = p.getCameraImage(
+            width,
+            height,
+            view,
+            projection,
+            renderer=p.ER_TINY_RENDERER,
+            physicsClientId=self.client,
+        )
+        return np.asarray(rgba, dtype=np.uint8).reshape(height, width, 4)[:, :, :3]
 
     @property
     def time(self) -> float:

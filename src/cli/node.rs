@@ -17,7 +17,8 @@ pub struct NodeArgs {
     /// none is left behind. Linux only.
     #[arg(long)]
     exit_with_parent: bool,
-    /// ROS arguments: `--ros-args [--params-file F] [-p name:=value] [-r from:=to] [--]`.
+    /// ROS arguments, as rcl reads them: `--ros-args [--params-file F] [-p [node:]name:=value]
+    /// [-r [node:]from:=to] [--log-level [logger:=]LEVEL] [-e ENCLAVE] [...] [--]`.
     #[arg(
         trailing_var_arg = true,
         allow_hyphen_values = true,
@@ -28,13 +29,6 @@ pub struct NodeArgs {
 
 /// Runs `cstep node` until Ctrl-C.
 pub fn run(args: NodeArgs) -> Result<(), String> {
-    if let Some(first) = args.ros_args.first() {
-        if first != "--ros-args" {
-            return Err(format!(
-                "unexpected argument \"{first}\" (ROS arguments follow --ros-args)"
-            ));
-        }
-    }
     let ros_args = RosArgs::parse(&args.ros_args)?;
     let stop = stop_on_ctrl_c()?;
     if args.exit_with_parent {

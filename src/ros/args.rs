@@ -1,75 +1,443 @@
-//! The `--ros-args` subset `cstep node` understands, as in rclcpp/rclpy.
+//! The ROS 2 command line (`--ros-args … [--]`), read by rcl's rules (rcl 9.2, Jazzy:
+//! `rcl/src/rcl/arguments.c`, `remap.c`, `node.c`), since ros2-client parses none of it.
 //!
-//! ros2-client parses no command line; this reads `--params-file FILE`, `-p name:=value`,
-//! `-r from:=to` (including `__ns` and `__node`), each also in its long form.
+//! Every flag rcl knows is read: `-r/--remap`, `-p/--param`, `--params-file`, `--log-level`,
+//! `--log-config-file`, `--log-file-name`, `-e/--enclave` and the `--enable-`/`--disable-`
+//! `rosout-logs`, `stdout-logs` and `external-lib-logs` switches. As in rcl, remap and parameter
+//! rules may be scoped to one node (`cstep_node:scan:=/lidar`, `cstep_node:horizon:=0.5`), a rule
+//! for another node is ignored, the first matching remap rule wins, and a malformed rule or an
+//! unknown flag is an error (rclcpp and rclpy refuse unknown ROS arguments too). The crate
+//! `ros2args` (0.5) was considered: it neither expands names before matching remap rules nor
+//! follows rcl's order of parameter overrides, nor reads nested namespace keys in parameter
+//! files, so the rules are ported here and tested case by case against rcl's behaviour
+//! (`tests/python/test_ros_args.py` compares with rclpy's).
 
 use std::path::PathBuf;
+
+use super::param_overrides::ParamSource;
 
 /// What `--ros-args … [--]` asked for.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct RosArgs {
-    /// `--params-file` files, in order (later files override earlier ones).
-    pub params_files: Vec<PathBuf>,
-    /// `-p name:=value` assignments, in order.
-    pub params: Vec<String>,
-    /// `-r from:=to` topic and service remappings.
-    pub remaps: Vec<(String, String)>,
-    /// `-r __ns:=/ns`.
-    pub namespace: Option<String>,
-    /// `-r __node:=name`.
-    pub node_name: Option<String>,
+    /// `--params-file FILE` and `-p [node:]name:=value`, in command-line order (the order rcl
+    /// merges them in, [`super::param_overrides`]).
+    pub params: Vec<ParamSource>,
+    /// `-r [node:]from:=to` rules, `__node` and `__ns` included, in order.
+    pub remaps: Vec<RemapRule>,
+    /// `--log-level LEVEL`: the default level (the last one given).
+    pub log_level: Option<LogLevel>,
+    /// `--log-level logger:=LEVEL`, in order (a later one for the same logger wins).
+    pub logger_levels: Vec<(String, LogLevel)>,
+    /// `--enable-`/`--disable-rosout-logs` (the last one given).
+    pub rosout_logs: Option<bool>,
+    /// `--enable-`/`--disable-stdout-logs` (the last one given).
+    pub stdout_logs: Option<bool>,
+    /// `--enable-`/`--disable-external-lib-logs` (the last one given).
+    pub external_lib_logs: Option<bool>,
+    /// `--log-config-file FILE`.
+    pub log_config_file: Option<PathBuf>,
+    /// `--log-file-name NAME`.
+    pub log_file_name: Option<String>,
+    /// `-e/--enclave ENCLAVE`.
+    pub enclave: Option<String>,
+}
+
+/// A `-r` rule: `[node:]from:=to`, `[node:]__ns:=/ns` or `[node:]__node:=name`.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct RemapRule {
+    /// The node the rule is for (`None`: every node).
+    pub node: Option<String>,
+    /// What it remaps.
+    pub kind: Remap,
+}
+
+/// What a remap rule replaces.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Remap {
+    /// `__node:=name` (or `__name:=name`): the node's name.
+    NodeName(String),
+    /// `__ns:=/ns`: the node's namespace.
+    Namespace(String),
+    /// A topic or service name (`rostopic://` or `rosservice://` restricts it to one kind).
+    Name {
+        /// Which kinds of names it applies to.
+        applies_to: NameKinds,
+        /// The name to match, as written (expanded against the node before matching).
+        from: String,
+        /// Its replacement, as written (expanded against the node).
+        to: String,
+    },
+}
+
+/// Which kinds of names a remap rule applies to.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum NameKinds {
+    /// Topics and services (no URL scheme).
+    Both,
+    /// `rostopic://…`: topics only.
+    Topics,
+    /// `rosservice://…`: services only.
+    Services,
+}
+
+/// Whether a name is a topic's or a service's (remap rules may apply to one kind only).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum NameKind {
+    /// A topic.
+    Topic,
+    /// A service.
+    Service,
+}
+
+/// A logging severity, as rcutils names them (case-insensitive on the command line).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+pub enum LogLevel {
+    /// `unset`: the logger follows its parent (for the default logger: `info`).
+    Unset,
+    /// `debug`.
+    Debug,
+    /// `info`.
+    Info,
+    /// `warn`.
+    Warn,
+    /// `error`.
+    Error,
+    /// `fatal`.
+    Fatal,
+}
+
+impl LogLevel {
+    /// rcutils' `rcutils_logging_severity_level_from_string`: the six names, any case.
+    pub fn parse(text: &str) -> Option<Self> {
+        Some(match text.to_ascii_uppercase().as_str() {
+            "UNSET" => LogLevel::Unset,
+            "DEBUG" => LogLevel::Debug,
+            "INFO" => LogLevel::Info,
+            "WARN" => LogLevel::Warn,
+            "ERROR" => LogLevel::Error,
+            "FATAL" => LogLevel::Fatal,
+            _ => return None,
+        })
+    }
+}
+
+/// The error for a malformed `flag value`, in rcl's words.
+fn bad(what: &str, flag: &str, value: &str, why: &str) -> String {
+    format!("--ros-args: couldn't parse {what}: '{flag} {value}': {why}")
 }
 
 impl RosArgs {
-    /// Parses the arguments after `--ros-args` (an optional `--` ends them; a further
-    /// `--ros-args` starts another block).
+    /// Parses a command line's ROS arguments: those after each `--ros-args`, up to `--` or the
+    /// end (a further `--ros-args` starts another block). Arguments outside the blocks are not
+    /// ROS arguments and are errors here, as `cstep node` takes no others.
     pub fn parse(args: &[String]) -> Result<Self, String> {
         let mut parsed = Self::default();
+        let mut in_block = false;
         let mut it = args.iter();
         while let Some(arg) = it.next() {
-            let mut value = |flag: &str| {
+            let arg = arg.as_str();
+            if arg == "--ros-args" {
+                in_block = true;
+                continue;
+            }
+            if !in_block {
+                return Err(format!(
+                    "unexpected argument \"{arg}\" (ROS arguments follow --ros-args)"
+                ));
+            }
+            if arg == "--" {
+                in_block = false;
+                continue;
+            }
+            let mut value = |what: &str| {
                 it.next()
                     .cloned()
-                    .ok_or_else(|| format!("--ros-args: {flag} needs a value"))
+                    .ok_or_else(|| format!("--ros-args: {arg} needs {what}"))
             };
-            match arg.as_str() {
-                "--ros-args" | "--" => {}
-                "--params-file" => parsed.params_files.push(PathBuf::from(value(arg)?)),
+            match arg {
                 "-p" | "--param" => {
-                    let assignment = value(arg)?;
-                    if !assignment.contains(":=") {
-                        return Err(format!(
-                            "--ros-args: -p expects name:=value, got \"{assignment}\""
-                        ));
-                    }
-                    parsed.params.push(assignment);
+                    let rule = value("a parameter rule, [node:]name:=value")?;
+                    parsed.params.push(
+                        parse_param_rule(&rule)
+                            .map_err(|why| bad("parameter override rule", arg, &rule, &why))?,
+                    );
                 }
                 "-r" | "--remap" => {
-                    let rule = value(arg)?;
-                    let (from, to) = rule.split_once(":=").ok_or_else(|| {
-                        format!("--ros-args: -r expects from:=to, got \"{rule}\"")
-                    })?;
-                    match from {
-                        "__ns" => parsed.namespace = Some(to.to_owned()),
-                        "__node" | "__name" => parsed.node_name = Some(to.to_owned()),
-                        _ => parsed.remaps.push((from.to_owned(), to.to_owned())),
+                    let rule = value("a remap rule, [node:]from:=to")?;
+                    parsed.remaps.push(
+                        parse_remap_rule(&rule)
+                            .map_err(|why| bad("remap rule", arg, &rule, &why))?,
+                    );
+                }
+                "--params-file" => {
+                    parsed
+                        .params
+                        .push(ParamSource::File(PathBuf::from(value("a file path")?)));
+                }
+                "--log-level" => {
+                    let rule = value("a level, LEVEL or logger:=LEVEL")?;
+                    let level = |text: &str| {
+                        LogLevel::parse(text).ok_or_else(|| {
+                            bad(
+                                "log level",
+                                arg,
+                                &rule,
+                                "not one of unset, debug, info, warn, error, fatal",
+                            )
+                        })
+                    };
+                    match rule.split_once(":=") {
+                        Some(("", _)) => {
+                            return Err(bad("log level", arg, &rule, "the logger name is empty"))
+                        }
+                        Some((logger, text)) => {
+                            parsed.logger_levels.push((logger.to_owned(), level(text)?))
+                        }
+                        None => parsed.log_level = Some(level(&rule)?),
                     }
                 }
-                other => return Err(format!("--ros-args: unsupported argument \"{other}\"")),
+                "--log-config-file" => {
+                    parsed.log_config_file = Some(PathBuf::from(value("a file path")?));
+                }
+                "--log-file-name" => parsed.log_file_name = Some(value("a file name")?),
+                "-e" | "--enclave" => parsed.enclave = Some(value("an enclave name")?),
+                "--enable-rosout-logs" => parsed.rosout_logs = Some(true),
+                "--disable-rosout-logs" => parsed.rosout_logs = Some(false),
+                "--enable-stdout-logs" => parsed.stdout_logs = Some(true),
+                "--disable-stdout-logs" => parsed.stdout_logs = Some(false),
+                "--enable-external-lib-logs" => parsed.external_lib_logs = Some(true),
+                "--disable-external-lib-logs" => parsed.external_lib_logs = Some(false),
+                other => return Err(format!("--ros-args: unknown ROS argument \"{other}\"")),
             }
         }
         Ok(parsed)
     }
 
-    /// The name `topic` is remapped to, or `topic` itself.
-    pub fn remap<'a>(&'a self, topic: &'a str) -> &'a str {
+    /// The node's name: the first `__node` rule for `default` (or for every node), else
+    /// `default` (rcl: the first matching rule wins).
+    pub fn node_name(&self, default: &str) -> String {
         self.remaps
             .iter()
-            .rev()
-            .find(|(from, _)| {
-                from == topic || from.trim_start_matches('/') == topic.trim_start_matches('/')
+            .filter(|rule| rule.applies_to(default))
+            .find_map(|rule| match &rule.kind {
+                Remap::NodeName(name) => Some(name.clone()),
+                _ => None,
             })
-            .map_or(topic, |(_, to)| to.as_str())
+            .unwrap_or_else(|| default.to_owned())
+    }
+
+    /// The node's namespace: the first `__ns` rule for node `name` (its name after `__node`, as
+    /// rcl matches it), else the root namespace.
+    pub fn namespace(&self, name: &str) -> String {
+        self.remaps
+            .iter()
+            .filter(|rule| rule.applies_to(name))
+            .find_map(|rule| match &rule.kind {
+                Remap::Namespace(ns) => Some(ns.clone()),
+                _ => None,
+            })
+            .unwrap_or_else(|| "/".to_owned())
+    }
+
+    /// The fully qualified name a topic or service `name` of node `node` in `namespace` ends
+    /// up with: `name` expanded ([`expand`]), then replaced by the first rule for this node and
+    /// kind whose expanded `from` is the same name (its `to` expanded alike).
+    pub fn resolve(
+        &self,
+        name: &str,
+        kind: NameKind,
+        node: &str,
+        namespace: &str,
+    ) -> Result<String, String> {
+        let expanded = expand(name, node, namespace)?;
+        for rule in self.remaps.iter().filter(|rule| rule.applies_to(node)) {
+            let Remap::Name {
+                applies_to,
+                from,
+                to,
+            } = &rule.kind
+            else {
+                continue;
+            };
+            let kind_matches = matches!(
+                (applies_to, kind),
+                (NameKinds::Both, _)
+                    | (NameKinds::Topics, NameKind::Topic)
+                    | (NameKinds::Services, NameKind::Service)
+            );
+            if kind_matches && expand(from, node, namespace)? == expanded {
+                return expand(to, node, namespace)
+                    .map_err(|e| format!("remap rule {from}:={to}: {e}"));
+            }
+        }
+        Ok(expanded)
+    }
+}
+
+impl RemapRule {
+    /// Whether the rule applies to node `name`.
+    fn applies_to(&self, name: &str) -> bool {
+        self.node.as_deref().is_none_or(|node| node == name)
+    }
+}
+
+/// rcl's lexer TOKEN: letters, digits and underscores.
+fn is_token(text: &str) -> bool {
+    !text.is_empty() && text.chars().all(|c| c.is_ascii_alphanumeric() || c == '_')
+}
+
+/// Splits an optional `node:` prefix (a token followed by a single `:`) off a rule.
+fn node_prefix(rule: &str) -> (Option<String>, &str) {
+    match rule.split_once(':') {
+        Some((node, rest))
+            if is_token(node)
+                && !rest.starts_with('=')
+                && !rest.starts_with("//")
+                && !node.starts_with("__") =>
+        {
+            (Some(node.to_owned()), rest)
+        }
+        _ => (None, rule),
+    }
+}
+
+/// `[node:]name:=yaml value` (`arguments.c`, `_rcl_parse_param_rule`): the name is tokens
+/// joined by `.` or `/`; a rule without a node is for every node (`/**`).
+fn parse_param_rule(rule: &str) -> Result<ParamSource, String> {
+    let (node, rest) = node_prefix(rule);
+    let (name, value) = rest.split_once(":=").ok_or("expected [node:]name:=value")?;
+    if name.contains('*') {
+        return Err("wildcards in parameter names are not implemented (nor in rcl)".into());
+    }
+    let valid = name
+        .split(['.', '/'])
+        .all(|part| is_token(part) || part.is_empty())
+        && name.split('.').all(|part| !part.is_empty());
+    if !valid || name.is_empty() {
+        return Err(format!("invalid parameter name \"{name}\""));
+    }
+    Ok(ParamSource::Assignment {
+        node,
+        name: name.to_owned(),
+        value: value.to_owned(),
+    })
+}
+
+/// `[node:]__node:=name`, `[node:]__ns:=/ns` or `[node:][rostopic://|rosservice://]from:=to`
+/// (`arguments.c`, `_rcl_parse_remap_begin_remap_rule`).
+fn parse_remap_rule(rule: &str) -> Result<RemapRule, String> {
+    let (node, rest) = node_prefix(rule);
+    let (from, to) = rest.split_once(":=").ok_or("expected [node:]from:=to")?;
+    let kind = match from {
+        "__node" | "__name" => {
+            if !is_token(to) || to.starts_with(|c: char| c.is_ascii_digit()) {
+                return Err(format!("node name not remapped to invalid name \"{to}\""));
+            }
+            Remap::NodeName(to.to_owned())
+        }
+        "__ns" => {
+            validate_namespace(to)?;
+            Remap::Namespace(to.to_owned())
+        }
+        _ => {
+            let (applies_to, from) = if let Some(name) = from.strip_prefix("rostopic://") {
+                (NameKinds::Topics, name)
+            } else if let Some(name) = from.strip_prefix("rosservice://") {
+                (NameKinds::Services, name)
+            } else {
+                (NameKinds::Both, from)
+            };
+            for (side, name) in [("match", from), ("replacement", to)] {
+                if name.contains('*') {
+                    return Err(format!(
+                        "wildcards ('*', '**') in a {side} are not implemented"
+                    ));
+                }
+                if name.contains('\\') {
+                    return Err("backreferences are not implemented".into());
+                }
+                check_name_syntax(name).map_err(|e| format!("{side} \"{name}\": {e}"))?;
+            }
+            Remap::Name {
+                applies_to,
+                from: from.to_owned(),
+                to: to.to_owned(),
+            }
+        }
+    };
+    Ok(RemapRule { node, kind })
+}
+
+/// A namespace for `__ns`: fully qualified (`/`, or `/token/token…` without a trailing `/`).
+fn validate_namespace(ns: &str) -> Result<(), String> {
+    let valid = ns == "/"
+        || (ns.starts_with('/')
+            && ns[1..]
+                .split('/')
+                .all(|t| is_token(t) && !t.starts_with(|c: char| c.is_ascii_digit())));
+    if valid {
+        Ok(())
+    } else {
+        Err(format!(
+            "namespace not remapped to a fully qualified name (found: \"{ns}\")"
+        ))
+    }
+}
+
+/// A topic or service name as written: optional `/` or `~/` (or just `~`), then tokens
+/// (possibly `{substitutions}`) separated by single `/`.
+fn check_name_syntax(name: &str) -> Result<(), String> {
+    let body = name
+        .strip_prefix("~/")
+        .or_else(|| name.strip_prefix('/'))
+        .unwrap_or(name);
+    if name == "~" {
+        return Ok(());
+    }
+    if body.is_empty() {
+        return Err("empty name".into());
+    }
+    for token in body.split('/') {
+        let bare = token.trim_start_matches('{').trim_end_matches('}');
+        if !is_token(bare) {
+            return Err(format!(
+                "\"{token}\" is not a name token (letters, digits, _)"
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// rcl's `rcl_expand_topic_name`: `~` is the node's private namespace (`/ns/node`), `{node}`,
+/// `{ns}` and `{namespace}` are substituted, a relative name is put in `namespace`; the result
+/// is a valid fully qualified name (`rmw_validate_full_topic_name`) or an error saying why.
+pub fn expand(name: &str, node: &str, namespace: &str) -> Result<String, String> {
+    let ns = namespace.trim_end_matches('/');
+    let private = format!("{ns}/{node}");
+    let substituted = name
+        .replace("{node}", node)
+        .replace("{namespace}", ns)
+        .replace("{ns}", ns);
+    let expanded = if substituted == "~" {
+        private
+    } else if let Some(rest) = substituted.strip_prefix("~/") {
+        format!("{private}/{rest}")
+    } else if substituted.starts_with('/') {
+        substituted
+    } else {
+        format!("{ns}/{substituted}")
+    };
+    let valid = expanded.len() > 1
+        && !expanded.ends_with('/')
+        && expanded[1..]
+            .split('/')
+            .all(|token| is_token(token) && !token.starts_with(|c: char| c.is_ascii_digit()));
+    if valid {
+        Ok(expanded)
+    } else {
+        Err(format!(
+            "\"{name}\" does not expand to a valid ROS name (got \"{expanded}\")"
+        ))
     }
 }
 
@@ -81,33 +449,165 @@ mod tests {
         line.split_whitespace().map(String::from).collect()
     }
 
-    #[test]
-    fn reads_the_rclcpp_forms() {
-        let parsed = RosArgs::parse(&args(
-            "--ros-args --params-file a.yaml -p seed:=3 --param horizon:=0.5 -r scan:=/lidar -r __ns:=/drone1 --remap __node:=monitor --",
-        ))
-        .unwrap();
-        assert_eq!(parsed.params_files, vec![PathBuf::from("a.yaml")]);
-        assert_eq!(parsed.params, vec!["seed:=3", "horizon:=0.5"]);
-        assert_eq!(parsed.namespace.as_deref(), Some("/drone1"));
-        assert_eq!(parsed.node_name.as_deref(), Some("monitor"));
-        assert_eq!(parsed.remap("scan"), "/lidar");
-        assert_eq!(parsed.remap("odom"), "odom");
+    fn parse(line: &str) -> RosArgs {
+        RosArgs::parse(&args(line)).unwrap()
+    }
+
+    fn error(line: &str) -> String {
+        let e = RosArgs::parse(&args(line)).unwrap_err();
+        assert!(!e.contains('\n'), "{e}");
+        e
     }
 
     #[test]
-    fn bad_forms_are_clear_errors() {
-        assert!(RosArgs::parse(&args("-p seed"))
-            .unwrap_err()
-            .contains("name:=value"));
-        assert!(RosArgs::parse(&args("-r scan"))
-            .unwrap_err()
-            .contains("from:=to"));
-        assert!(RosArgs::parse(&args("--params-file"))
-            .unwrap_err()
-            .contains("needs a value"));
-        assert!(RosArgs::parse(&args("--enclave x"))
-            .unwrap_err()
-            .contains("unsupported"));
+    fn reads_every_flag_in_short_and_long_form() {
+        let parsed = parse(
+            "--ros-args --params-file a.yaml -p seed:=3 --param cstep_node:horizon:=0.5 \
+             -r scan:=/lidar --remap __ns:=/drone1 -r __node:=monitor --log-level debug \
+             --log-level cstep_node:=WARN --enable-rosout-logs --disable-stdout-logs \
+             --disable-external-lib-logs --log-config-file log.cfg --log-file-name run \
+             -e /enclave --",
+        );
+        assert_eq!(
+            parsed.params,
+            [
+                ParamSource::File("a.yaml".into()),
+                ParamSource::Assignment {
+                    node: None,
+                    name: "seed".into(),
+                    value: "3".into()
+                },
+                ParamSource::Assignment {
+                    node: Some("cstep_node".into()),
+                    name: "horizon".into(),
+                    value: "0.5".into()
+                },
+            ]
+        );
+        assert_eq!(parsed.node_name("cstep_node"), "monitor");
+        assert_eq!(parsed.namespace("monitor"), "/drone1");
+        assert_eq!(parsed.log_level, Some(LogLevel::Debug));
+        assert_eq!(
+            parsed.logger_levels,
+            [("cstep_node".to_owned(), LogLevel::Warn)]
+        );
+        assert_eq!(
+            (
+                parsed.rosout_logs,
+                parsed.stdout_logs,
+                parsed.external_lib_logs
+            ),
+            (Some(true), Some(false), Some(false))
+        );
+        assert_eq!(parsed.log_config_file, Some(PathBuf::from("log.cfg")));
+        assert_eq!(parsed.log_file_name.as_deref(), Some("run"));
+        assert_eq!(parsed.enclave.as_deref(), Some("/enclave"));
+    }
+
+    #[test]
+    fn several_blocks_and_the_last_log_level_wins() {
+        let parsed = parse("--ros-args --log-level info -- --ros-args --log-level ERROR");
+        assert_eq!(parsed.log_level, Some(LogLevel::Error));
+        assert!(error("--ros-args -- stray").contains("unexpected argument \"stray\""));
+        assert!(error("stray").contains("follow --ros-args"));
+    }
+
+    #[test]
+    fn the_first_matching_node_and_namespace_rule_wins_and_scoped_rules_need_their_node() {
+        let parsed = parse(
+            "--ros-args -r other:__node:=x -r __node:=first -r __node:=second \
+             -r other:__ns:=/o -r first:__ns:=/f -r __ns:=/g",
+        );
+        assert_eq!(parsed.node_name("cstep_node"), "first");
+        assert_eq!(parsed.node_name("other"), "x");
+        // The namespace rule is matched against the name after __node (rcl's node.c).
+        assert_eq!(parsed.namespace("first"), "/f");
+        assert_eq!(parsed.namespace("cstep_node"), "/g");
+        assert_eq!(parse("--ros-args").namespace("cstep_node"), "/");
+    }
+
+    #[test]
+    fn names_expand_as_rcl_expands_them() {
+        for (name, ns, expected) in [
+            ("scan", "/", "/scan"),
+            ("scan", "/drone1", "/drone1/scan"),
+            ("cstep/evaluate", "/drone1", "/drone1/cstep/evaluate"),
+            ("/diagnostics", "/drone1", "/diagnostics"),
+            ("~/debug", "/drone1", "/drone1/cstep_node/debug"),
+            ("~", "/", "/cstep_node"),
+            ("{node}/out", "/a/b", "/a/b/cstep_node/out"),
+            ("{ns}/x", "/", "/x"),
+            ("{namespace}/x", "/a", "/a/x"),
+        ] {
+            assert_eq!(expand(name, "cstep_node", ns).unwrap(), expected, "{name}");
+        }
+        for bad in ["a//b", "/", "a/", "1scan", "sc an", "/x/2y"] {
+            let e = expand(bad, "cstep_node", "/").unwrap_err();
+            assert!(e.contains("valid ROS name"), "{e}");
+        }
+    }
+
+    #[test]
+    fn remap_rules_match_expanded_names_for_their_node_and_kind() {
+        let parsed = parse(
+            "--ros-args -r other_node:scan:=/wrong -r cstep_node:scan:=/lidar \
+             -r odom:=/first -r odom:=/second -r /cstep/evaluate:=/elsewhere \
+             -r rosservice://cstep/evaluate_batch:=batch -r rostopic://cstep/reward:=~/reward",
+        );
+        let resolve =
+            |name: &str, kind, ns: &str| parsed.resolve(name, kind, "cstep_node", ns).unwrap();
+        use NameKind::{Service, Topic};
+        assert_eq!(resolve("scan", Topic, "/drone1"), "/lidar");
+        assert_eq!(
+            parsed.resolve("scan", Topic, "other", "/").unwrap(),
+            "/scan"
+        );
+        assert_eq!(resolve("odom", Topic, "/drone1"), "/first");
+        // An absolute match names one name: /cstep/evaluate, not /drone1/cstep/evaluate.
+        assert_eq!(resolve("cstep/evaluate", Service, "/"), "/elsewhere");
+        assert_eq!(
+            resolve("cstep/evaluate", Service, "/drone1"),
+            "/drone1/cstep/evaluate"
+        );
+        assert_eq!(
+            resolve("cstep/evaluate_batch", Service, "/drone1"),
+            "/drone1/batch"
+        );
+        assert_eq!(
+            resolve("cstep/evaluate_batch", Topic, "/drone1"),
+            "/drone1/cstep/evaluate_batch"
+        );
+        assert_eq!(
+            resolve("cstep/reward", Topic, "/drone1"),
+            "/drone1/cstep_node/reward"
+        );
+        assert_eq!(
+            resolve("cstep/reward", Service, "/drone1"),
+            "/drone1/cstep/reward"
+        );
+    }
+
+    #[test]
+    fn malformed_rules_are_one_line_errors_naming_the_rule() {
+        for (line, part) in [
+            ("--ros-args -p seed", "'-p seed'"),
+            ("--ros-args -p :=3", "invalid parameter name"),
+            ("--ros-args -p a..b:=3", "invalid parameter name"),
+            ("--ros-args -r scan", "'-r scan'"),
+            ("--ros-args -r __ns:=drone1", "fully qualified"),
+            ("--ros-args -r __ns:=/drone1/", "fully qualified"),
+            ("--ros-args -r __node:=a/b", "invalid name"),
+            ("--ros-args -r sc*n:=x", "wildcards"),
+            ("--ros-args -r scan:=a//b", "replacement"),
+            ("--ros-args --params-file", "needs a file path"),
+            ("--ros-args --log-level loud", "not one of"),
+            ("--ros-args --log-level :=debug", "logger name is empty"),
+            ("--ros-args --log-level x:=loud", "not one of"),
+            ("--ros-args -e", "needs an enclave"),
+            ("--ros-args --verbose", "unknown ROS argument \"--verbose\""),
+        ] {
+            let e = error(line);
+            assert!(e.contains(part), "{line}: {e}");
+        }
     }
 }

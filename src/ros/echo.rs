@@ -94,13 +94,20 @@ impl EchoType {
         format!("{package}/msg/{kind}")
     }
 
-    /// The type of cstep's own output topics, known by their default names.
+    /// The type of cstep's own output topics, known by their default names in any namespace
+    /// (`/cstep/empowerment`, `/drone1/cstep/empowerment`, ...).
     pub fn of_cstep_topic(topic: &str) -> Option<Self> {
-        match topic {
-            "/cstep/empowerment" => Some(EchoType::Empowerment),
-            "/cstep/reward" => Some(EchoType::EmpoweredReward),
-            "/diagnostics" => Some(EchoType::DiagnosticArray),
-            "/cstep/markers" => Some(EchoType::MarkerArray),
+        if topic == "/diagnostics" {
+            return Some(EchoType::DiagnosticArray);
+        }
+        let (namespace, name) = topic.rsplit_once("/cstep/")?;
+        if !(namespace.is_empty() || namespace.starts_with('/')) {
+            return None;
+        }
+        match name {
+            "empowerment" => Some(EchoType::Empowerment),
+            "reward" => Some(EchoType::EmpoweredReward),
+            "markers" => Some(EchoType::MarkerArray),
             _ => None,
         }
     }
@@ -460,5 +467,11 @@ mod tests {
             Some(EchoType::DiagnosticArray)
         );
         assert_eq!(EchoType::of_cstep_topic("/scan"), None);
+        assert_eq!(
+            EchoType::of_cstep_topic("/drone1/cstep/reward"),
+            Some(EchoType::EmpoweredReward)
+        );
+        assert_eq!(EchoType::of_cstep_topic("drone1/cstep/reward"), None);
+        assert_eq!(EchoType::of_cstep_topic("/cstep/evaluate"), None);
     }
 }

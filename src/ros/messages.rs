@@ -309,7 +309,8 @@ pub struct KeyValue {
 /// `diagnostic_msgs/DiagnosticStatus`.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 pub struct DiagnosticStatus {
-    /// 0 OK, 1 WARN, 2 ERROR, 3 STALE.
+    /// [`DiagnosticStatus::OK`], [`DiagnosticStatus::WARN`], [`DiagnosticStatus::ERROR`] or
+    /// [`DiagnosticStatus::STALE`].
     pub level: u8,
     /// Component name.
     pub name: String,
@@ -319,6 +320,17 @@ pub struct DiagnosticStatus {
     pub hardware_id: String,
     /// Details.
     pub values: Vec<KeyValue>,
+}
+
+impl DiagnosticStatus {
+    /// `diagnostic_msgs/DiagnosticStatus` `OK`.
+    pub const OK: u8 = 0;
+    /// `WARN`.
+    pub const WARN: u8 = 1;
+    /// `ERROR`.
+    pub const ERROR: u8 = 2;
+    /// `STALE`.
+    pub const STALE: u8 = 3;
 }
 
 /// `diagnostic_msgs/DiagnosticArray`.
@@ -470,11 +482,21 @@ pub struct MarkerArray {
     pub markers: Vec<Marker>,
 }
 
+/// `rosgraph_msgs/Clock`: the simulation time on `/clock` (ros2-client's own `/clock` reader
+/// expects `builtin_interfaces/Time`, a type rclcpp and rclpy never publish there).
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default)]
+pub struct Clock {
+    /// The simulation time.
+    pub clock: Time,
+}
+
 /// Every type here travels over DDS with ros2-client.
 macro_rules! ros_messages {
     ($($t:ty),*) => { $(impl ros2_client::Message for $t {})* };
 }
 ros_messages!(
+    Clock,
     Odometry,
     LaserScan,
     PoseStamped,

@@ -28,22 +28,25 @@ use ros2_client::{
     Message, MessageTypeName, Name, Node, NodeName, NodeOptions, Publisher, QosProfile, Server,
     ServiceMapping, ServiceTypeName,
 };
+use tracing::{debug, info, warn};
 
-use super::args::RosArgs;
-use super::context::{context_from_env, resolve};
+use super::args::{NameKind, RosArgs};
+use super::context::context_from_env;
 use super::convert::{
     empowerment_message, goal_position, laser_scan_to_scan, odometry_to_state, reward_message,
 };
+use super::logging;
 use super::markers::rollout_markers;
 use super::messages::{
-    DiagnosticArray, DiagnosticStatus, EmpoweredReward, Empowerment, EvaluateBatchRequest,
+    Clock, DiagnosticArray, DiagnosticStatus, EmpoweredReward, Empowerment, EvaluateBatchRequest,
     EvaluateBatchResponse, EvaluateRequest, EvaluateResponse, Header, KeyValue, LaserScan,
     MarkerArray, Odometry, Point, PoseStamped, Time,
 };
+use super::param_overrides::{ParamOverrides, ParamSource};
 use super::rivals::{self, Claims, Verdict};
 use super::stamps::{Order, StampOrder};
-use crate::config::{load_all, NodeSettings, Parameters, DEFAULT_NODE_NAME};
-use crate::estimator::{Estimator, EMPOWERMENT_FLOOR};
+use crate::config::{validate, NodeSettings, ParameterSet, Parameters, DEFAULT_NODE_NAME};
+use crate::estimator::{robot_description, Estimator, EMPOWERMENT_FLOOR};
 use crate::parameters::Value;
 use crate::reward::{empowered_reward, floor_reward, task_reward};
 
@@ -52,15 +55,20 @@ use crate::reward::{empowered_reward, floor_reward, task_reward};
 /// ([`super::context`]), and serves. An error if another node already answers under its names
 /// on that domain ([`super::rivals`]): the node then stops within its first seconds.
 pub fn run(config: &[PathBuf], ros_args: &RosArgs, stop: Arc<AtomicBool>) -> Result<(), String> {
-    let node_name = ros_args.node_name.as_deref().unwrap_or(DEFAULT_NODE_NAME);
-    let paths: Vec<&std::path::Path> = config
-        .iter()
-        .chain(&ros_args.params_files)
-        .map(PathBuf::as_path)
-        .collect();
-    let (settings, interface, parameters) =
-        load_all(&paths, node_name, &ros_args.params).map_err(|e| e.to_string())?;
+    let node_name = ros_args.node_name(DEFAULT_NODE_NAME);
+    let namespace = ros_args.namespace(&node_name);
+    logging::init(ros_args, &logging::logger_name(&namespace, &node_name))?;
+    refuse_security(ros_args)?;
+    let fqn = format!("{}/{node_name}", namespace.trim_end_matches('/'));
+    let (settings, interface, parameters) = load_parameters(config, ros_args, &fqn)?;
     let estimator = Estimator::from_settings(&settings).map_err(|e| e.to_string())?;
+    let status = StatusIdentity {
+        // diagnostic_updater's convention: "<node's fully qualified name>: <task>".
+        name: format!("{fqn}: empowerment"),
+        hardware_id: robot_description(&settings)
+            .map_err(|e| e.to_string())?
+            .name,
+    };
     let shared = Arc::new(Shared::new(
         estimator,
         settings.safety_coefficient,
@@ -70,39 +78,38 @@ pub fn run(config: &[PathBuf], ros_args: &RosArgs, stop: Arc<AtomicBool>) -> Res
     ));
 
     let context = context_from_env(true)?;
-    let namespace = ros_args.namespace.as_deref().unwrap_or("/");
     let options = parameter_options(&shared, &parameters);
     let mut node = context
         .new_node(
-            NodeName::new(namespace, node_name).map_err(|e| format!("node name: {e:?}"))?,
+            NodeName::new(&namespace, &node_name).map_err(|e| format!("node name: {e:?}"))?,
             options,
         )
         .map_err(|e| format!("cannot create the node: {e:?}"))?;
-    let ports = Ports::open(&mut node, &interface, ros_args, namespace)?;
-    let named = |name: &str| resolve(namespace, ros_args.remap(name));
+    let names = Names::resolve(&interface, ros_args, &node_name, &namespace)?;
+    let ports = Ports::open(&mut node, &names)?;
     let guard = Guard {
         claims: Claims::new()
-            .topic(&named(&interface.empowerment_topic))
-            .topic(&named(&interface.reward_topic))
-            .service(&named(&interface.evaluate_service))
-            .service(&named(&interface.evaluate_batch_service)),
+            .topic(&names.empowerment)
+            .topic(&names.reward)
+            .service(&names.evaluate)
+            .service(&names.evaluate_batch),
         participant: context.domain_participant(),
         started: Instant::now(),
         node: node.fully_qualified_name(),
         domain: context.domain_id(),
     };
-    eprintln!(
+    info!(
         "cstep node {} on ROS_DOMAIN_ID {}: {} + {} -> {}, {} (markers on {} while subscribed); \
          services {}, {}",
         node.fully_qualified_name(),
         context.domain_id(),
-        ros_args.remap(&interface.odom_topic),
-        ros_args.remap(&interface.scan_topic),
-        ros_args.remap(&interface.empowerment_topic),
-        ros_args.remap(&interface.reward_topic),
-        ros_args.remap(&interface.markers_topic),
-        ros_args.remap(&interface.evaluate_service),
-        ros_args.remap(&interface.evaluate_batch_service),
+        names.odom,
+        names.scan,
+        names.empowerment,
+        names.reward,
+        names.markers,
+        names.evaluate,
+        names.evaluate_batch,
     );
 
     let worker = {
@@ -118,7 +125,8 @@ pub fn run(config: &[PathBuf], ros_args: &RosArgs, stop: Arc<AtomicBool>) -> Res
     executor
         .spawn(node.spinner().map_err(|e| format!("{e:?}"))?.spin())
         .detach();
-    smol::block_on(executor.run(serve(&shared, &ports, &node, &guard)));
+    let clock = NodeClock::new(interface.use_sim_time);
+    smol::block_on(executor.run(serve(&shared, &ports, &node, &guard, &status, &clock)));
     shared.stopping.store(true, Ordering::SeqCst);
     shared.arrived.notify_all();
     worker
@@ -127,8 +135,146 @@ pub fn run(config: &[PathBuf], ros_args: &RosArgs, stop: Arc<AtomicBool>) -> Res
     if let Some(refusal) = shared.latest().refusal.take() {
         return Err(refusal);
     }
-    eprintln!("cstep node stopped");
+    info!("cstep node stopped");
     Ok(())
+}
+
+/// Refuses `ROS_SECURITY_ENABLE=true`: RustDDS is built here without DDS Security, so the node
+/// would run unencrypted where its user asked for security. Without it an enclave (`-e`) is
+/// unused, as rcl leaves it unused, and the node says so.
+fn refuse_security(ros_args: &RosArgs) -> Result<(), String> {
+    if std::env::var("ROS_SECURITY_ENABLE").as_deref() == Ok("true") {
+        return Err(
+            "ROS_SECURITY_ENABLE=true, but cstep cannot run secured (its DDS, RustDDS, \
+             is built without DDS Security); refusing to run unsecured"
+                .into(),
+        );
+    }
+    if let Some(enclave) = &ros_args.enclave {
+        info!("enclave {enclave} unused: ROS_SECURITY_ENABLE is not true");
+    }
+    Ok(())
+}
+
+/// The node's parameters: the built-in defaults, then the `--config` files and `--ros-args`
+/// overrides that apply to node `fqn` ([`super::param_overrides`]), validated.
+fn load_parameters(
+    config: &[PathBuf],
+    ros_args: &RosArgs,
+    fqn: &str,
+) -> Result<(crate::config::Settings, NodeSettings, Parameters), String> {
+    let sources: Vec<ParamSource> = config
+        .iter()
+        .cloned()
+        .map(ParamSource::File)
+        .chain(ros_args.params.iter().cloned())
+        .collect();
+    let overrides = ParamOverrides::read(&sources)?;
+    for warning in overrides.unmatched_files(fqn) {
+        warn!("{warning}");
+    }
+    let mut set = ParameterSet::builtin();
+    for o in overrides.for_node(fqn) {
+        debug!(
+            "parameter override {} = {} ({})",
+            o.name,
+            serde_json::to_string(&o.value).unwrap_or_default(),
+            o.source
+        );
+        set.insert(&o.name, o.value, &o.source, o.base_dir.as_deref());
+    }
+    validate(set).map_err(|e| e.to_string())
+}
+
+/// The node's topic and service names, fully qualified after namespace and remapping.
+struct Names {
+    odom: String,
+    scan: String,
+    goal: String,
+    empowerment: String,
+    reward: String,
+    markers: String,
+    diagnostics: String,
+    clock: String,
+    evaluate: String,
+    evaluate_batch: String,
+}
+
+impl Names {
+    /// Resolves the configured names for node `node` in `namespace` by rcl's rules
+    /// ([`RosArgs::resolve`]).
+    fn resolve(
+        interface: &NodeSettings,
+        args: &RosArgs,
+        node: &str,
+        namespace: &str,
+    ) -> Result<Self, String> {
+        let topic = |name: &str| args.resolve(name, NameKind::Topic, node, namespace);
+        let service = |name: &str| args.resolve(name, NameKind::Service, node, namespace);
+        Ok(Self {
+            odom: topic(&interface.odom_topic)?,
+            scan: topic(&interface.scan_topic)?,
+            goal: topic(&interface.goal_topic)?,
+            empowerment: topic(&interface.empowerment_topic)?,
+            reward: topic(&interface.reward_topic)?,
+            markers: topic(&interface.markers_topic)?,
+            diagnostics: topic("/diagnostics")?,
+            clock: topic("/clock")?,
+            evaluate: service(&interface.evaluate_service)?,
+            evaluate_batch: service(&interface.evaluate_batch_service)?,
+        })
+    }
+}
+
+/// Who the diagnostics status is about: its name and hardware.
+struct StatusIdentity {
+    /// `<fully qualified node name>: empowerment`.
+    name: String,
+    /// The robot, as its URDF names it.
+    hardware_id: String,
+}
+
+/// The node's clock, for the diagnostics' stamps: the system clock, or under `use_sim_time`
+/// the newest `/clock` (zero until one arrives, as in rclcpp).
+enum NodeClock {
+    /// The system clock.
+    Wall,
+    /// The newest `/clock` time.
+    Sim(Mutex<Time>),
+}
+
+impl NodeClock {
+    /// The clock `use_sim_time` asks for.
+    fn new(use_sim_time: bool) -> Self {
+        if use_sim_time {
+            NodeClock::Sim(Mutex::new(Time::default()))
+        } else {
+            NodeClock::Wall
+        }
+    }
+
+    /// Now, on this clock.
+    fn now(&self) -> Time {
+        match self {
+            NodeClock::Wall => {
+                let since_epoch = std::time::SystemTime::now()
+                    .duration_since(std::time::UNIX_EPOCH)
+                    .unwrap_or_default();
+                Time {
+                    sec: since_epoch.as_secs() as i32,
+                    nanosec: since_epoch.subsec_nanos(),
+                }
+            }
+            NodeClock::Sim(time) => *time.lock().unwrap_or_else(|e| e.into_inner()),
+        }
+    }
+
+    /// Takes a `/clock` message (ignored on the system clock).
+    fn tick(&self, clock: &Clock) {
+        if let NodeClock::Sim(time) = self {
+            *time.lock().unwrap_or_else(|e| e.into_inner()) = clock.clock;
+        }
+    }
 }
 
 /// Watches DDS discovery for another participant answering under this node's names
@@ -218,6 +364,7 @@ struct Ports {
     odom: ros2_client::Subscription<Odometry>,
     scan: ros2_client::Subscription<LaserScan>,
     goal: ros2_client::Subscription<PoseStamped>,
+    clock: ros2_client::Subscription<Clock>,
     empowerment: Arc<Publisher<Empowerment>>,
     reward: Arc<Publisher<EmpoweredReward>>,
     markers: Arc<Publisher<MarkerArray>>,
@@ -227,12 +374,7 @@ struct Ports {
 }
 
 impl Ports {
-    fn open(
-        node: &mut Node,
-        interface: &NodeSettings,
-        args: &RosArgs,
-        namespace: &str,
-    ) -> Result<Self, String> {
+    fn open(node: &mut Node, names: &Names) -> Result<Self, String> {
         let reliable = QosProfile::publisher_default()
             .reliability_reliable(WhenFull::Wait(Duration::from_millis(10)))
             .durability(Durability::Volatile)
@@ -243,51 +385,35 @@ impl Ports {
             .durability(Durability::Volatile)
             .history(History::KeepLast { depth: 5 });
         let topic = |name: &str, package: &str, kind: &str, qos: &QosProfile| {
-            let name = resolve(namespace, args.remap(name));
-            let parsed = Name::parse(&name).map_err(|e| format!("topic name \"{name}\": {e:?}"))?;
+            let parsed = Name::parse(name).map_err(|e| format!("topic name \"{name}\": {e:?}"))?;
             node.create_topic(&parsed, MessageTypeName::new(package, kind), qos)
                 .map_err(|e| format!("topic {name}: {e:?}"))
         };
-        let odom_topic = topic(&interface.odom_topic, "nav_msgs", "Odometry", &sensor)?;
-        let scan_topic = topic(&interface.scan_topic, "sensor_msgs", "LaserScan", &sensor)?;
-        let goal_topic = topic(
-            &interface.goal_topic,
-            "geometry_msgs",
-            "PoseStamped",
-            &reliable,
-        )?;
-        let empowerment_topic = topic(
-            &interface.empowerment_topic,
-            "cstep_msgs",
-            "Empowerment",
-            &reliable,
-        )?;
-        let reward_topic = topic(
-            &interface.reward_topic,
-            "cstep_msgs",
-            "EmpoweredReward",
-            &reliable,
-        )?;
+        let odom_topic = topic(&names.odom, "nav_msgs", "Odometry", &sensor)?;
+        let scan_topic = topic(&names.scan, "sensor_msgs", "LaserScan", &sensor)?;
+        let goal_topic = topic(&names.goal, "geometry_msgs", "PoseStamped", &reliable)?;
+        let clock_topic = topic(&names.clock, "rosgraph_msgs", "Clock", &sensor)?;
+        let empowerment_topic = topic(&names.empowerment, "cstep_msgs", "Empowerment", &reliable)?;
+        let reward_topic = topic(&names.reward, "cstep_msgs", "EmpoweredReward", &reliable)?;
         let markers_topic = topic(
-            &interface.markers_topic,
+            &names.markers,
             "visualization_msgs",
             "MarkerArray",
             &reliable,
         )?;
         let diagnostics_topic = topic(
-            "/diagnostics",
+            &names.diagnostics,
             "diagnostic_msgs",
             "DiagnosticArray",
             &reliable,
         )?;
         let service = |name: &str, kind: &str| {
-            let name = resolve(namespace, args.remap(name));
             let parsed =
                 Name::parse(&name).map_err(|e| format!("service name \"{name}\": {e:?}"))?;
             Ok::<_, String>((parsed, ServiceTypeName::new("cstep_msgs", kind)))
         };
-        let (evaluate_name, evaluate_type) = service(&interface.evaluate_service, "Evaluate")?;
-        let (batch_name, batch_type) = service(&interface.evaluate_batch_service, "EvaluateBatch")?;
+        let (evaluate_name, evaluate_type) = service(&names.evaluate, "Evaluate")?;
+        let (batch_name, batch_type) = service(&names.evaluate_batch, "EvaluateBatch")?;
         Ok(Self {
             odom: node
                 .create_subscription(&odom_topic, Some(sensor.clone()))
@@ -295,6 +421,9 @@ impl Ports {
             scan: node
                 .create_subscription(&scan_topic, Some(sensor.clone()))
                 .map_err(failed("the scan subscription"))?,
+            clock: node
+                .create_subscription(&clock_topic, Some(sensor.clone()))
+                .map_err(failed("the /clock subscription"))?,
             goal: node
                 .create_subscription(&goal_topic, Some(reliable.clone()))
                 .map_err(failed("the goal subscription"))?,
@@ -361,11 +490,24 @@ fn parameter_options(shared: &Arc<Shared>, parameters: &Parameters) -> NodeOptio
 /// The DDS-side tasks: keep the newest odometry and goal, post scans, answer the service,
 /// publish diagnostics, watch for rivals ([`Guard`]); returns when Ctrl-C was pressed, or when a
 /// rival found at start-up made the node refuse to run (the reason is in `Latest::refusal`).
-async fn serve(shared: &Arc<Shared>, ports: &Ports, node: &Node, guard: &Guard) {
+async fn serve(
+    shared: &Arc<Shared>,
+    ports: &Ports,
+    node: &Node,
+    guard: &Guard,
+    status: &StatusIdentity,
+    clock: &NodeClock,
+) {
     let odometry = ports.odom.async_stream().for_each(|received| async move {
         match received {
             Ok((odom, _)) => shared.latest().odom = Some((odom, Instant::now())),
             Err(e) => shared.undecodable("odometry", "message", &e),
+        }
+    });
+    let clock_ticks = ports.clock.async_stream().for_each(|received| async move {
+        match received {
+            Ok((message, _)) => clock.tick(&message),
+            Err(e) => shared.undecodable("/clock", "message", &e),
         }
     });
     let goals = ports.goal.async_stream().for_each(|received| async move {
@@ -415,7 +557,9 @@ async fn serve(shared: &Arc<Shared>, ports: &Ports, node: &Node, guard: &Guard) 
         loop {
             smol::Timer::after(Duration::from_secs(1)).await;
             // Diagnostics are best effort: a full queue must not stop the node.
-            let _ = ports.diagnostics.publish(shared.diagnostics());
+            let _ = ports
+                .diagnostics
+                .publish(shared.diagnostics(status, clock.now()));
         }
     };
     let rivals = async {
@@ -431,7 +575,7 @@ async fn serve(shared: &Arc<Shared>, ports: &Ports, node: &Node, guard: &Guard) 
                 }
                 Verdict::Warn(line) => {
                     if latest.rival.as_ref() != Some(&line) {
-                        eprintln!("cstep: warning: {line}");
+                        warn!("{line}");
                     }
                     latest.rival = Some(line);
                 }
@@ -446,6 +590,7 @@ async fn serve(shared: &Arc<Shared>, ports: &Ports, node: &Node, guard: &Guard) 
     futures::future::select_all([
         Box::pin(odometry) as std::pin::Pin<Box<dyn std::future::Future<Output = ()>>>,
         Box::pin(goals),
+        Box::pin(clock_ticks),
         Box::pin(scans),
         Box::pin(service),
         Box::pin(batch_service),
@@ -542,6 +687,10 @@ fn score_scans(shared: &Shared, outputs: &Outputs) {
         };
         match shared.score(&query, shared.safety_coefficient(), with_markers) {
             Ok((e, r, markers)) => {
+                debug!(
+                    "scan {}.{:09}: empowerment {:.4} (valid: {}, {})",
+                    stamp.sec, stamp.nanosec, e.empowerment, e.valid, e.status
+                );
                 shared.scored(stamp, order);
                 // A full queue or a lost subscriber is not the node's failure; diagnostics show it.
                 if outputs.empowerment.publish(e).is_err() || outputs.reward.publish(r).is_err() {
@@ -798,7 +947,7 @@ impl Shared {
     }
 
     /// The once-a-second health report.
-    fn diagnostics(&self) -> DiagnosticArray {
+    fn diagnostics(&self, status: &StatusIdentity, stamp: Time) -> DiagnosticArray {
         let mut latest = self.latest();
         let age = |t: Option<Instant>| t.map(|t| t.elapsed().as_secs_f64());
         let odom_age = age(latest.odom.as_ref().map(|(_, t)| *t));
@@ -807,26 +956,26 @@ impl Shared {
         let jump = latest.time_jump.take();
         let (level, message) = if let Some(rival) = &latest.rival {
             (
-                2,
+                DiagnosticStatus::ERROR,
                 jump.map_or_else(|| rival.clone(), |jump| format!("{rival}; {jump}")),
             )
         } else if !fresh(odom_age) || !fresh(scan_age) {
             let stale = "inputs stale: no score";
             (
-                3,
+                DiagnosticStatus::STALE,
                 jump.map_or_else(|| stale.to_owned(), |jump| format!("{stale}; {jump}")),
             )
         } else if let Some(jump) = jump {
-            (1, jump)
+            (DiagnosticStatus::WARN, jump)
         } else if let Some(problem) = latest.last_problem.take() {
-            (1, problem)
+            (DiagnosticStatus::WARN, problem)
         } else if latest.last_scan_unwatched {
             (
-                0,
+                DiagnosticStatus::OK,
                 "no subscriber to the scores: scans not scored".to_owned(),
             )
         } else {
-            (0, "scoring".to_owned())
+            (DiagnosticStatus::OK, "scoring".to_owned())
         };
         let show = |a: Option<f64>| a.map_or("never".to_owned(), |a| format!("{a:.3}"));
         let (score, valid, elapsed) =
@@ -858,12 +1007,15 @@ impl Shared {
             ("markers_published", latest.markers_published.to_string()),
         ];
         DiagnosticArray {
-            header: Header::default(),
+            header: Header {
+                stamp,
+                frame_id: String::new(),
+            },
             status: vec![DiagnosticStatus {
                 level,
-                name: "cstep: empowerment".into(),
+                name: status.name.clone(),
                 message,
-                hardware_id: "cstep".into(),
+                hardware_id: status.hardware_id.clone(),
                 values: values
                     .into_iter()
                     .map(|(key, value)| KeyValue {

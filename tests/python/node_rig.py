@@ -119,8 +119,9 @@ def odometry(vx: float = 0.5) -> Odometry:
 class Rig:
     """This test's rclpy side: publishers of inputs, collectors of outputs."""
 
-    def __init__(self, context, executor):
-        self.node = Node("cstep_test_rig", context=context)
+    def __init__(self, context, executor, namespace: str = "/"):
+        """A rig for the node in ``namespace``: its topics are the rig's relative names there."""
+        self.node = Node("cstep_test_rig", namespace=namespace, context=context)
         executor.add_node(self.node)
         self.executor = executor
         self.odom = self.node.create_publisher(Odometry, "odom", RELIABLE)
@@ -131,10 +132,10 @@ class Rig:
         # The node scores scans only while someone subscribes to a score topic.
         self.score_subscriptions = [
             self.node.create_subscription(
-                Empowerment, "/cstep/empowerment", self.empowerment.append, RELIABLE
+                Empowerment, "cstep/empowerment", self.empowerment.append, RELIABLE
             ),
             self.node.create_subscription(
-                EmpoweredReward, "/cstep/reward", self.reward.append, RELIABLE
+                EmpoweredReward, "cstep/reward", self.reward.append, RELIABLE
             ),
         ]
         self.node.create_subscription(
@@ -144,7 +145,7 @@ class Rig:
             lambda: (
                 self.scan.get_subscription_count() >= 1
                 and self.odom.get_subscription_count() >= 1
-                and self.node.count_publishers("/cstep/reward") >= 1
+                and self.node.count_publishers(self.node.resolve_topic_name("cstep/reward")) >= 1
             ),
             "the node's subscriptions and publishers",
             executor,
@@ -155,10 +156,13 @@ class Rig:
         while time.monotonic() < end:
             self.executor.spin_once(timeout_sec=0.01)
 
-    def feed(self, count: int, rate_hz: float = 20.0, first_sec: int = 1000, **odom) -> None:
+    def feed(
+        self, count: int, rate_hz: float = 20.0, first_sec: int = 1000, width: float = 2.5, **odom
+    ) -> None:
+        """Publish ``count`` odometries and corridor scans (``width`` m wide) at ``rate_hz``."""
         for k in range(count):
             self.odom.publish(odometry(**odom))
-            self.scan.publish(corridor_scan(first_sec + k))
+            self.scan.publish(corridor_scan(first_sec + k, width=width))
             self.spin_for(1.0 / rate_hz)
 
     def feed_until(self, condition, what: str, first_sec: int, timeout: float = 20.0) -> int:

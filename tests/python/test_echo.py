@@ -126,7 +126,7 @@ def test_echo_prints_diagnostics_and_markers_by_their_names(rig, echo):
     assert e.finish(timeout=25) == 0, e.stderr
     [diagnostics] = e.documents()
     [status] = diagnostics["status"]
-    assert status["name"] == "cstep: empowerment" and status["hardware_id"] == "cstep"
+    assert status["name"] == "/cstep_node: empowerment" and status["hardware_id"] == "cf2x"
     keys = [kv["key"] for kv in status["values"]]
     assert "scans_scored" in keys and "markers_published" in keys
 

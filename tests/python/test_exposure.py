@@ -21,7 +21,8 @@ from conftest import DISCOVERY_TIMEOUT_S, HERE, REPO
 from node_rig import CONFIG, cstep_binary, stop_gently
 
 LOOPBACK = "127.0.0.1"
-BANNER = re.compile(r"^cstep node \S+ on ROS_DOMAIN_ID")
+# The start-up line, after the rcutils prefix `[INFO] [time] [logger]: `.
+BANNER = re.compile(r"^\[INFO\] \[[0-9.]+\] \[[\w.]+\]: cstep node \S+ on ROS_DOMAIN_ID")
 
 
 def bound_udp(pid: int) -> set[str]:

@@ -1,0 +1,123 @@
+"""Issue 13, item 4: diagnostics and logs as ROS tools expect them. The diagnostics status is named
+`<fully qualified node name>: empowerment` (diagnostic_updater's convention), carries the robot's
+name as `hardware_id` and is stamped with the node's clock — `/clock` under `use_sim_time`. The
+console log is rcutils' format and honours `--log-level`, globally and per logger. Real nodes,
+real rclpy, real DDS, localhost only, a domain per test."""
+
+import os
+import subprocess
+import time
+from pathlib import Path
+
+import pytest
+from builtin_interfaces.msg import Time
+from conftest import REPO, wait_until
+from diagnostic_msgs.msg import DiagnosticArray
+from node_rig import CONFIG, RELIABLE, cstep_binary, stop_gently
+from rclpy.node import Node
+from rosgraph_msgs.msg import Clock
+
+STARTED = "cstep node /"
+
+
+def start(ros_domain: int, *ros_args: str, tag: str) -> tuple[subprocess.Popen, Path]:
+    log_path = Path(os.environ.get("TMPDIR", "/tmp")) / f"cstep-node-logs-{ros_domain}-{tag}.log"
+    with open(log_path, "w") as log:
+        proc = subprocess.Popen(
+            [str(cstep_binary()), "node", "--config", str(CONFIG), "--ros-args", *ros_args],
+            stdout=log,
+            stderr=subprocess.STDOUT,
+            cwd=REPO,
+        )
+    return proc, log_path
+
+
+def log_of(ros_domain: int, *ros_args: str, tag: str) -> str:
+    """The console output of a node started with these arguments, up to its start-up line."""
+    proc, log_path = start(ros_domain, *ros_args, tag=tag)
+    try:
+        deadline = time.monotonic() + 30
+        while STARTED not in log_path.read_text():
+            assert proc.poll() is None, log_path.read_text()
+            assert time.monotonic() < deadline, log_path.read_text()
+            time.sleep(0.1)
+    finally:
+        stop_gently(proc)
+    return log_path.read_text()
+
+
+def test_log_level_debug_adds_debug_lines_that_the_default_leaves_out(ros_domain):
+    default = log_of(ros_domain, tag="default")
+    assert "[DEBUG]" not in default
+    # Only the node's own lines: none of RustDDS's or ros2-client's internal records.
+    assert "UDPListener" not in default and "Creating topic" not in default, default
+    # rcutils' format, and the node's logger named as rcl names it.
+    assert "[INFO] [" in default and "] [cstep_node]: cstep node /cstep_node on" in default
+
+    debug = log_of(ros_domain, "--log-level", "debug", tag="debug")
+    assert "[DEBUG]" in debug and "parameter override horizon = 1.0" in debug, debug
+
+    # Per logger: the node's own logger name counts, another logger's does not.
+    scoped = log_of(ros_domain, "--log-level", "cstep_node:=DEBUG", tag="scoped")
+    assert "[DEBUG]" in scoped, scoped
+    other = log_of(ros_domain, "--log-level", "controller_server:=debug", tag="other")
+    assert "[DEBUG]" not in other, other
+    in_namespace = log_of(
+        ros_domain, "-r", "__ns:=/drone1", "--log-level", "drone1:=debug", tag="namespace"
+    )
+    assert "] [drone1.cstep_node]: " in in_namespace and "[DEBUG]" in in_namespace
+
+    # --disable-stdout-logs: a running node that prints nothing of its own.
+    proc, log_path = start(ros_domain, "--disable-stdout-logs", "--log-level", "debug", tag="quiet")
+    try:
+        time.sleep(3)
+        assert proc.poll() is None, log_path.read_text()
+    finally:
+        stop_gently(proc)
+    quiet = log_path.read_text()
+    assert "[INFO]" not in quiet and "[DEBUG]" not in quiet, quiet
+
+
+def diagnostics_of(proc, ros_context, executor, clock_sec: int | None = None) -> DiagnosticArray:
+    """The first diagnostics after a /clock at ``clock_sec`` (when given) was published."""
+    node = Node("cstep_diagnostics_probe", context=ros_context)
+    executor.add_node(node)
+    received: list[DiagnosticArray] = []
+    node.create_subscription(DiagnosticArray, "/diagnostics", received.append, RELIABLE)
+    clock = node.create_publisher(Clock, "/clock", 10)
+    try:
+        wait_until(lambda: bool(received) or proc.poll() is not None, "diagnostics", executor)
+        assert proc.poll() is None
+        if clock_sec is None:
+            return received[-1]
+
+        def stamped() -> bool:
+            clock.publish(Clock(clock=Time(sec=clock_sec, nanosec=5)))
+            return any(d.header.stamp.sec == clock_sec for d in received)
+
+        wait_until(stamped, "diagnostics stamped with /clock", executor, timeout=15)
+        return received[-1]
+    finally:
+        node.destroy_node()
+
+
+@pytest.mark.parametrize("use_sim_time", [False, True])
+def test_diagnostics_are_named_for_the_node_and_stamped_with_its_clock(
+    use_sim_time, ros_domain, ros_context, executor
+):
+    args = ["-r", "__ns:=/drone1", "-p", f"use_sim_time:={str(use_sim_time).lower()}"]
+    proc, _ = start(ros_domain, *args, tag=f"diag-{use_sim_time}")
+    try:
+        diagnostics = diagnostics_of(
+            proc, ros_context, executor, clock_sec=4242 if use_sim_time else None
+        )
+    finally:
+        stop_gently(proc)
+    [status] = diagnostics.status
+    assert status.name == "/drone1/cstep_node: empowerment"
+    assert status.hardware_id == "cf2x"  # the URDF's <robot name>
+    stamp = diagnostics.header.stamp.sec + diagnostics.header.stamp.nanosec * 1e-9
+    if use_sim_time:
+        assert diagnostics.header.stamp.sec == 4242
+    else:
+        assert abs(stamp - time.time()) < 10  # the wall clock, no longer (0, 0)

@@ -25,8 +25,8 @@ use rayon::prelude::*;
 use ros2_client::dds::rustdds::RTPSEntity;
 use ros2_client::qos::{Durability, History, WhenFull};
 use ros2_client::{
-    Message, MessageTypeName, Name, Node, NodeName, NodeOptions, Publisher, QosProfile, Server,
-    ServiceMapping, ServiceTypeName,
+    Message, MessageTypeName, Name, Node, NodeName, NodeOptions, ParameterValue, Publisher,
+    QosProfile, Server, ServiceMapping, ServiceTypeName,
 };
 use tracing::{debug, info, warn};
 
@@ -125,7 +125,7 @@ pub fn run(config: &[PathBuf], ros_args: &RosArgs, stop: Arc<AtomicBool>) -> Res
     executor
         .spawn(node.spinner().map_err(|e| format!("{e:?}"))?.spin())
         .detach();
-    let clock = NodeClock::new(interface.use_sim_time);
+    let clock = NodeClock::default();
     smol::block_on(executor.run(serve(&shared, &ports, &node, &guard, &status, &clock)));
     shared.stopping.store(true, Ordering::SeqCst);
     shared.arrived.notify_all();
@@ -234,46 +234,36 @@ struct StatusIdentity {
     hardware_id: String,
 }
 
-/// The node's clock, for the diagnostics' stamps: the system clock, or under `use_sim_time`
-/// the newest `/clock` (zero until one arrives, as in rclcpp).
-enum NodeClock {
-    /// The system clock.
-    Wall,
+/// The node's clock, for the diagnostics' stamps: the system clock, or while the node's
+/// `use_sim_time` parameter is true the newest `/clock` (zero until one arrives, as in rclcpp).
+/// `use_sim_time` is live, so the choice is made at each stamp from the node's parameter store,
+/// the one place that sees its sets (ros2-client handles them itself and calls no set action for
+/// it); the newest `/clock` is kept either way, so a switch to sim time stamps with it at once,
+/// as rclcpp's time source does.
+#[derive(Default)]
+struct NodeClock {
     /// The newest `/clock` time.
-    Sim(Mutex<Time>),
+    newest: Mutex<Time>,
 }
 
 impl NodeClock {
-    /// The clock `use_sim_time` asks for.
-    fn new(use_sim_time: bool) -> Self {
-        if use_sim_time {
-            NodeClock::Sim(Mutex::new(Time::default()))
-        } else {
-            NodeClock::Wall
+    /// Now, on the clock `node`'s `use_sim_time` asks for.
+    fn now(&self, node: &Node) -> Time {
+        if node.get_parameter("use_sim_time") == Some(ParameterValue::Boolean(true)) {
+            return *self.newest.lock().unwrap_or_else(|e| e.into_inner());
+        }
+        let since_epoch = std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .unwrap_or_default();
+        Time {
+            sec: since_epoch.as_secs() as i32,
+            nanosec: since_epoch.subsec_nanos(),
         }
     }
 
-    /// Now, on this clock.
-    fn now(&self) -> Time {
-        match self {
-            NodeClock::Wall => {
-                let since_epoch = std::time::SystemTime::now()
-                    .duration_since(std::time::UNIX_EPOCH)
-                    .unwrap_or_default();
-                Time {
-                    sec: since_epoch.as_secs() as i32,
-                    nanosec: since_epoch.subsec_nanos(),
-                }
-            }
-            NodeClock::Sim(time) => *time.lock().unwrap_or_else(|e| e.into_inner()),
-        }
-    }
-
-    /// Takes a `/clock` message (ignored on the system clock).
+    /// Takes a `/clock` message.
     fn tick(&self, clock: &Clock) {
-        if let NodeClock::Sim(time) = self {
-            *time.lock().unwrap_or_else(|e| e.into_inner()) = clock.clock;
-        }
+        *self.newest.lock().unwrap_or_else(|e| e.into_inner()) = clock.clock;
     }
 }
 
@@ -471,7 +461,7 @@ fn failed<E: std::fmt::Debug>(what: &'static str) -> impl FnOnce(E) -> String {
 
 /// Declares every parameter ([`super::parameters`]); a `safety_coefficient` change takes effect
 /// at the next score. The others are read-only (they shape the control sample, the model and
-/// the topics), but `use_sim_time`, which ros2-client applies to its clock itself.
+/// the topics), but `use_sim_time`, which ros2-client keeps itself ([`NodeClock`] reads it).
 fn parameter_options(shared: &Arc<Shared>, parameters: &Parameters) -> NodeOptions {
     let live = shared.clone();
     let options = NodeOptions::new()
@@ -559,7 +549,7 @@ async fn serve(
             // Diagnostics are best effort: a full queue must not stop the node.
             let _ = ports
                 .diagnostics
-                .publish(shared.diagnostics(status, clock.now()));
+                .publish(shared.diagnostics(status, clock.now(node)));
         }
     };
     let rivals = async {

@@ -399,7 +399,7 @@ impl Ports {
         )?;
         let service = |name: &str, kind: &str| {
             let parsed =
-                Name::parse(&name).map_err(|e| format!("service name \"{name}\": {e:?}"))?;
+                Name::parse(name).map_err(|e| format!("service name \"{name}\": {e:?}"))?;
             Ok::<_, String>((parsed, ServiceTypeName::new("cstep_msgs", kind)))
         };
         let (evaluate_name, evaluate_type) = service(&names.evaluate, "Evaluate")?;

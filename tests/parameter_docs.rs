@@ -72,7 +72,9 @@ fn yaml_file() -> String {
          # Written from the table in src/parameters.rs by `make parameter-docs`: change a\n\
          # parameter there, not here. Each one: what it means, then its type, unit, accepted\n\
          # values and whether it can change while the node runs (live) or not (read-only).\n\
-         cstep_node:\n  ros__parameters:\n",
+         # `/**` applies to every node, whatever its name and namespace (rcl's wildcard, as\n\
+         # launch_ros writes it), so the file serves `-r __ns:=/drone1` and launch files as is.\n\
+         /**:\n  ros__parameters:\n",
     );
     for p in PARAMETERS {
         let value = if p.default == BUILTIN_URDF_PATH {

@@ -45,7 +45,7 @@ def cstep_node(ros_domain):
 def shipped_parameters() -> dict[str, dict]:
     """config/cstep.yaml's parameters: value, and the comment above each, split into the
     description and the summary line (type, unit, accepted values; live or read-only)."""
-    values = yaml.safe_load(CONFIG.read_text())["cstep_node"]["ros__parameters"]
+    values = yaml.safe_load(CONFIG.read_text())["/**"]["ros__parameters"]
     shipped, comments = {}, []
     for line in CONFIG.read_text().splitlines():
         text = line.strip()

@@ -28,7 +28,7 @@ ROS_BUILD_ENV := $(VENV_ENV) \
 	AMENT_PREFIX_PATH=$(VENV_ABS) CMAKE_PREFIX_PATH=$(VENV_ABS) PATH=$(VENV_ABS)/bin:$$PATH
 
 .PHONY: test lint lint-rust lint-python test-rust test-python venv colcon bench bench-latency \
-	bench-steps bench-train bench-stale soak fuzz-cdr
+	bench-steps bench-train bench-stale soak fuzz-cdr parameter-docs
 
 test: lint test-rust test-python
 
@@ -53,6 +53,11 @@ test-python: $(MSGS_STAMP) $(COLCON_STAMP)
 	$(CARGO) build --release --quiet
 	$(VENV_ENV) CSTEP_BIN=$(abspath $(TARGET_DIR))/release/cstep \
 		CSTEP_COLCON_INSTALL=$(abspath $(COLCON_WS))/install $(VPY) -m pytest -q tests/python
+
+# Rewrites the README's parameter table and config/cstep.yaml from the parameter table in
+# src/parameters.rs (`make test` fails while they differ from it).
+parameter-docs:
+	CSTEP_WRITE_DOCS=1 $(CARGO) test --test parameter_docs
 
 # The CDR decode fuzz loop (tests/cdr_fuzz.rs) at length: random and mutated rclpy-made bytes
 # for every message type the node reads, through its DDS readers' decoding and its input checks.

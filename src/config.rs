@@ -1,8 +1,10 @@
 //! The node's parameters: ROS 2 `ros__parameters` YAML, validated on load with clear errors.
 //!
-//! Parameters are read into a [`ParameterSet`] (from a file, the built-in defaults, and
-//! `-p name:=value` overrides), then each consumer takes the names it owns and checks them; any
-//! name nobody took is reported as unknown, so a typo never silently falls back to a default.
+//! Parameters are read into a [`ParameterSet`] (the built-in defaults, then files, then
+//! `-p name:=value` overrides), checked one by one against their definitions in
+//! [`crate::parameters::PARAMETERS`] into [`Parameters`], and any name the table does not define
+//! is reported as unknown, so a typo never silently falls back to a default. [`Settings`] and
+//! [`NodeSettings`] are read from the checked values.
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -11,14 +13,13 @@ use serde_norway::Value;
 
 use crate::model::CommandAxes;
 use crate::occupancy::UnknownSpace;
+pub use crate::parameters::BUILTIN_URDF_PATH;
+use crate::parameters::{self, Value as Typed, PARAMETERS};
 use crate::sampling::{Controls, SamplerKind, CONTROL_SAMPLE_BUDGET_BYTES};
 use crate::volume::{EstimatorKind, VolumeDims};
 
 /// The node name whose parameters are read when none is given.
 pub const DEFAULT_NODE_NAME: &str = "cstep_node";
-
-/// The default parameter file, compiled in so the binary runs anywhere.
-pub const BUILTIN_CONFIG: &str = include_str!("../config/cstep.yaml");
 
 /// The Crazyflie 2.x URDF, compiled in for the built-in defaults.
 pub const BUILTIN_URDF: &str = include_str!("../urdf/cf2x.urdf");
@@ -49,19 +50,15 @@ pub struct ParameterSet {
 }
 
 impl ParameterSet {
-    /// The built-in defaults (`config/cstep.yaml` as compiled in).
+    /// The built-in defaults, from [`PARAMETERS`].
     pub fn builtin() -> Self {
-        let mut set = Self::default();
-        set.merge_yaml(BUILTIN_CONFIG, "built-in config", None, DEFAULT_NODE_NAME)
-            .expect("the built-in config is valid");
-        set.values.insert(
-            "robot_description".into(),
-            (
-                Value::String(BUILTIN_URDF_PATH.into()),
-                "built-in config".into(),
-            ),
-        );
-        set
+        let values = PARAMETERS.iter().map(|p| {
+            let value = serde_norway::from_str(p.default).expect("a default reads as YAML");
+            (p.name.to_owned(), (value, "built-in defaults".to_owned()))
+        });
+        Self {
+            values: values.collect(),
+        }
     }
 
     /// Overlays the parameters file `path`'s section for node `node_name`.
@@ -159,77 +156,106 @@ impl ParameterSet {
         }
     }
 
-    fn take(&mut self, name: &str) -> Option<(Value, String)> {
-        self.values.remove(name)
-    }
-
-    /// Takes a number; `None` when unset, null or NaN (the ROS idiom for "not set").
-    pub fn take_f64(&mut self, name: &str) -> Result<Option<f64>, ConfigError> {
-        let Some((value, source)) = self.take(name) else {
-            return Ok(None);
-        };
-        match value {
-            Value::Null => Ok(None),
-            Value::Number(n) => Ok(n.as_f64().filter(|v| !v.is_nan())),
-            other => Err(ConfigError::new(
-                &source,
-                format!("'{name}' must be a number, got {}", show(&other)),
-            )),
+    /// Checks every parameter against its definition, defaults filling what no file or
+    /// override set; fails on the first bad value (naming where it was set), then on the first
+    /// name the table does not define.
+    pub fn check(mut self) -> Result<Parameters, ConfigError> {
+        let mut checked = BTreeMap::new();
+        for p in PARAMETERS {
+            let (value, source) = self
+                .values
+                .remove(p.name)
+                .unwrap_or((Value::Null, "parameters".to_owned()));
+            let value = p
+                .check(&value)
+                .map_err(|message| ConfigError::new(&source, message))?;
+            checked.insert(p.name, (value, source));
         }
-    }
-
-    /// Takes a non-negative integer.
-    pub fn take_u64(&mut self, name: &str) -> Result<Option<u64>, ConfigError> {
-        let Some((value, source)) = self.take(name) else {
-            return Ok(None);
-        };
-        match &value {
-            Value::Null => Ok(None),
-            Value::Number(n) if n.as_u64().is_some() => Ok(n.as_u64()),
-            other => Err(ConfigError::new(
-                &source,
-                format!("'{name}' must be a whole number ≥ 0, got {}", show(other)),
-            )),
-        }
-    }
-
-    /// Takes a string (numbers are accepted and read as text, as `volume_dims: 2` is).
-    pub fn take_string(&mut self, name: &str) -> Result<Option<(String, String)>, ConfigError> {
-        let Some((value, source)) = self.take(name) else {
-            return Ok(None);
-        };
-        match value {
-            Value::Null => Ok(None),
-            Value::String(s) => Ok(Some((s, source))),
-            Value::Number(n) => Ok(Some((n.to_string(), source))),
-            other => Err(ConfigError::new(
-                &source,
-                format!("'{name}' must be a string, got {}", show(&other)),
-            )),
-        }
-    }
-
-    /// Fails on the first parameter no consumer took.
-    pub fn finish(self, known: &[&str]) -> Result<(), ConfigError> {
         match self.values.into_iter().next() {
-            None => Ok(()),
-            Some((name, (_, source))) => Err(ConfigError::new(
-                &source,
-                format!("unknown parameter '{name}' (known: {})", known.join(", ")),
-            )),
+            None => Ok(Parameters { values: checked }),
+            Some((name, (_, source))) => {
+                let known: Vec<&str> = PARAMETERS.iter().map(|p| p.name).collect();
+                Err(ConfigError::new(
+                    &source,
+                    format!("unknown parameter '{name}' (known: {})", known.join(", ")),
+                ))
+            }
         }
     }
 }
 
-/// The marker path the built-in config uses for the compiled-in URDF.
-pub const BUILTIN_URDF_PATH: &str = "builtin:cf2x.urdf";
+/// Every parameter's checked value (`None`: an optional one left unset) and where it was set.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Parameters {
+    values: BTreeMap<&'static str, (Option<Typed>, String)>,
+}
+
+impl Parameters {
+    /// The value of `name`; `None` when it is unset or not a parameter.
+    pub fn get(&self, name: &str) -> Option<&Typed> {
+        self.values.get(name).and_then(|(value, _)| value.as_ref())
+    }
+
+    /// Where `name` was set: a file, "command line" or "built-in defaults".
+    fn source(&self, name: &str) -> String {
+        self.values
+            .get(name)
+            .map_or_else(String::new, |(_, source)| source.clone())
+    }
+
+    /// Every parameter's definition and value, in the table's order.
+    pub fn iter(&self) -> impl Iterator<Item = (&'static parameters::Parameter, Option<&Typed>)> {
+        PARAMETERS.iter().map(|p| (p, self.get(p.name)))
+    }
+
+    fn double(&self, name: &str) -> Option<f64> {
+        match self.get(name) {
+            Some(Typed::Double(v)) => Some(*v),
+            None => None,
+            Some(other) => unreachable!("'{name}' is a double in the table, got {other:?}"),
+        }
+    }
+
+    fn required_double(&self, name: &str) -> f64 {
+        self.double(name)
+            .unwrap_or_else(|| unreachable!("the table requires '{name}'"))
+    }
+
+    fn integer(&self, name: &str) -> i64 {
+        match self.get(name) {
+            Some(Typed::Integer(v)) => *v,
+            other => unreachable!("'{name}' is a required integer in the table, got {other:?}"),
+        }
+    }
+
+    fn text(&self, name: &str) -> &str {
+        match self.get(name) {
+            Some(Typed::Text(v)) => v,
+            other => unreachable!("'{name}' is a required string in the table, got {other:?}"),
+        }
+    }
+
+    fn flag(&self, name: &str) -> bool {
+        match self.get(name) {
+            Some(Typed::Bool(v)) => *v,
+            other => unreachable!("'{name}' is a required bool in the table, got {other:?}"),
+        }
+    }
+
+    /// The word set for `name`, parsed by `parse`: the table's choices are exactly the words
+    /// `parse` knows (`config::tests::table_choices_are_the_names_the_code_parses`).
+    fn choice<T>(&self, name: &str, parse: impl Fn(&str) -> Option<T>) -> T {
+        let word = self.text(name);
+        parse(word).unwrap_or_else(|| unreachable!("'{name}': the table allows {word}"))
+    }
+}
 
 /// Nested parameter maps as dotted names (`limits: {speed: 2}` is `limits.speed`), as in ROS 2.
 pub fn flatten(prefix: &str, mapping: &serde_norway::Mapping, out: &mut Vec<(String, Value)>) {
     for (key, value) in mapping {
         let key = match key {
             Value::String(s) => s.clone(),
-            other => show(other),
+            other => parameters::show(other),
         };
         let name = if prefix.is_empty() {
             key
@@ -252,20 +278,6 @@ fn resolve_path(value: Value, base_dir: Option<&Path>) -> Value {
         }
         _ => value,
     }
-}
-
-/// A value as it reads in a one-line error: scalars as YAML (`soon`, `true`), lists and maps in
-/// flow style (`[1,2]`), never the block YAML that would span lines.
-fn show(value: &Value) -> String {
-    let text = match value {
-        Value::Sequence(_) | Value::Mapping(_) | Value::Tagged(_) => {
-            serde_json::to_string(value).ok()
-        }
-        _ => serde_norway::to_string(value).ok(),
-    };
-    text.map(|s| s.trim().to_owned())
-        .filter(|s| !s.contains('\n'))
-        .unwrap_or_else(|| format!("{value:?}"))
 }
 
 /// Which dynamics model rolls out the trajectories.
@@ -338,29 +350,6 @@ pub struct Settings {
     pub ceiling_height: Option<f64>,
 }
 
-/// The parameter names [`Settings`] owns — a contract with users' parameter files.
-pub const SETTINGS_PARAMETERS: [&str; 15] = [
-    "robot_description",
-    "model",
-    "horizon",
-    "trajectories",
-    "steps",
-    "sampler",
-    "seed",
-    "safety_coefficient",
-    "volume_dims",
-    "estimator",
-    "robot_radius",
-    "max_acceleration",
-    "unknown_space",
-    "floor_height",
-    "ceiling_height",
-];
-
-/// Largest accepted trajectory count and step count: beyond these an evaluation takes seconds.
-const MAX_TRAJECTORIES: u64 = 100_000;
-const MAX_STEPS: u64 = 10_000;
-
 impl Settings {
     /// The built-in defaults: the paper's settings with the Crazyflie 2.x.
     pub fn builtin() -> Self {
@@ -374,99 +363,58 @@ impl Settings {
         overrides: &[String],
     ) -> Result<Self, ConfigError> {
         let paths: Vec<&Path> = path.into_iter().collect();
-        load_all(&paths, node_name, overrides).map(|(settings, _)| settings)
+        load_all(&paths, node_name, overrides).map(|(settings, ..)| settings)
     }
 
-    /// Takes and validates this struct's parameters from `set`, leaving the others.
-    pub fn take_from(set: &mut ParameterSet) -> Result<Self, ConfigError> {
-        let robot_description = match set.take_string("robot_description")? {
-            None => RobotSource::Builtin,
-            Some((path, _)) if path == BUILTIN_URDF_PATH => RobotSource::Builtin,
-            Some((path, _)) => RobotSource::File(PathBuf::from(path)),
+    /// Reads this struct's parameters from the checked values; fails only on the limits that
+    /// span parameters (the control sample's memory, the ceiling above the floor).
+    pub fn from_parameters(p: &Parameters) -> Result<Self, ConfigError> {
+        let robot_description = match p.text("robot_description") {
+            BUILTIN_URDF_PATH => RobotSource::Builtin,
+            path => RobotSource::File(PathBuf::from(path)),
         };
-        let models = ["quadrotor", "point_mass"];
-        let model = required("model", named(set, "model", ModelKind::from_name, &models)?)?;
-        let horizon = required_positive(set, "horizon")?;
-        let count_source = |name: &str| set.values.get(name).map(|(_, s)| s.clone());
-        let sample_source = [count_source("trajectories"), count_source("steps")];
-        let trajectories = required(
-            "trajectories",
-            bounded_count(set, "trajectories", 1, MAX_TRAJECTORIES)?,
+        let count = |name: &str| {
+            usize::try_from(p.integer(name)).expect("the table bounds counts to 1..=100000")
+        };
+        let (trajectories, steps) = (count("trajectories"), count("steps"));
+        let volume_dims = match p.integer("volume_dims") {
+            3 => VolumeDims::Three,
+            _ => VolumeDims::Two,
+        };
+        within_budget(
+            trajectories,
+            steps,
+            volume_dims,
+            [p.source("trajectories"), p.source("steps")],
         )?;
-        let steps = required("steps", bounded_count(set, "steps", 1, MAX_STEPS)?)?;
-        let samplers: Vec<_> = SamplerKind::ALL.iter().map(|s| s.name()).collect();
-        let sampler = required(
-            "sampler",
-            named(set, "sampler", SamplerKind::from_name, &samplers)?,
-        )?;
-        let seed = required("seed", set.take_u64("seed")?)?;
-        let safety_coefficient = required_positive(set, "safety_coefficient")?;
-        let volume_dims = required(
-            "volume_dims",
-            named(
-                set,
-                "volume_dims",
-                |s| match s {
-                    "2" => Some(VolumeDims::Two),
-                    "3" => Some(VolumeDims::Three),
-                    _ => None,
-                },
-                &["2", "3"],
-            )?,
-        )?;
-        within_budget(trajectories, steps, volume_dims, sample_source)?;
-        let estimators: Vec<_> = EstimatorKind::ALL.iter().map(|e| e.name()).collect();
-        let estimator = required(
-            "estimator",
-            named(set, "estimator", EstimatorKind::from_name, &estimators)?,
-        )?;
-        let robot_radius = positive(set, "robot_radius")?;
-        let max_acceleration = positive(set, "max_acceleration")?;
-        let policies = ["occupied", "free"];
-        let unknown_space = required(
-            "unknown_space",
-            named(set, "unknown_space", UnknownSpace::from_name, &policies)?,
-        )?;
-        let ceiling_source = set.values.get("ceiling_height").map(|(_, s)| s.clone());
-        let floor_height = finite(set, "floor_height")?;
-        let ceiling_height = finite(set, "ceiling_height")?;
+        let floor_height = p.double("floor_height");
+        let ceiling_height = p.double("ceiling_height");
         if let (Some(floor), Some(ceiling)) = (floor_height, ceiling_height) {
             if ceiling <= floor {
                 return Err(ConfigError::new(
-                    &ceiling_source.unwrap_or_default(),
+                    &p.source("ceiling_height"),
                     format!("'ceiling_height' ({ceiling}) must be above 'floor_height' ({floor})"),
                 ));
             }
         }
         Ok(Self {
             robot_description,
-            model,
-            horizon,
+            model: p.choice("model", ModelKind::from_name),
+            horizon: p.required_double("horizon"),
             trajectories,
             steps,
-            sampler,
-            seed,
-            safety_coefficient,
+            sampler: p.choice("sampler", SamplerKind::from_name),
+            seed: u64::try_from(p.integer("seed")).expect("the table bounds the seed to ≥ 0"),
+            safety_coefficient: p.required_double("safety_coefficient"),
             volume_dims,
-            estimator,
-            robot_radius,
-            max_acceleration,
-            unknown_space,
+            estimator: p.choice("estimator", EstimatorKind::from_name),
+            robot_radius: p.double("robot_radius"),
+            max_acceleration: p.double("max_acceleration"),
+            unknown_space: p.choice("unknown_space", UnknownSpace::from_name),
             floor_height,
             ceiling_height,
         })
     }
-}
-
-/// A parameter every evaluation needs: the built-in config always sets it, so it is missing
-/// only when a file or override cleared it (`name: ~`).
-fn required<T>(name: &str, value: Option<T>) -> Result<T, ConfigError> {
-    value.ok_or_else(|| {
-        ConfigError::new(
-            "parameters",
-            format!("'{name}' must be set (the built-in config sets it; a file or -p cleared it)"),
-        )
-    })
 }
 
 /// Refuses `trajectories × steps` whose control sample would exceed
@@ -476,14 +424,14 @@ fn within_budget(
     trajectories: usize,
     steps: usize,
     volume_dims: VolumeDims,
-    sources: [Option<String>; 2],
+    sources: [String; 2],
 ) -> Result<(), ConfigError> {
     let axes = CommandAxes::for_volume_dims(volume_dims);
     let bytes = Controls::bytes(trajectories, steps, axes);
     if bytes <= CONTROL_SAMPLE_BUDGET_BYTES {
         return Ok(());
     }
-    let mut sources: Vec<String> = sources.into_iter().flatten().collect();
+    let mut sources = sources.to_vec();
     sources.dedup();
     let mib = |b: u64| b as f64 / f64::from(1 << 20);
     Err(ConfigError::new(
@@ -527,77 +475,33 @@ pub struct NodeSettings {
     pub use_sim_time: bool,
 }
 
-/// The parameter names [`NodeSettings`] owns.
-pub const NODE_PARAMETERS: [&str; 11] = [
-    "odom_topic",
-    "scan_topic",
-    "goal_topic",
-    "empowerment_topic",
-    "reward_topic",
-    "markers_topic",
-    "evaluate_service",
-    "evaluate_batch_service",
-    "input_timeout",
-    "time_jump_tolerance",
-    "use_sim_time",
-];
-
 impl NodeSettings {
-    /// Takes and validates this struct's parameters from `set`, leaving the others.
-    pub fn take_from(set: &mut ParameterSet) -> Result<Self, ConfigError> {
-        let mut name = |key: &str| -> Result<String, ConfigError> {
-            let (value, source) = required(key, set.take_string(key)?)?;
-            if value.is_empty() || value.contains(char::is_whitespace) {
-                return Err(ConfigError::new(
-                    &source,
-                    format!("'{key}' must be a ROS name without spaces, got \"{value}\""),
-                ));
-            }
-            Ok(value)
-        };
-        let odom_topic = name("odom_topic")?;
-        let scan_topic = name("scan_topic")?;
-        let goal_topic = name("goal_topic")?;
-        let empowerment_topic = name("empowerment_topic")?;
-        let reward_topic = name("reward_topic")?;
-        let markers_topic = name("markers_topic")?;
-        let evaluate_service = name("evaluate_service")?;
-        let evaluate_batch_service = name("evaluate_batch_service")?;
-        let input_timeout = required_positive(set, "input_timeout")?;
-        let time_jump_tolerance = required_positive(set, "time_jump_tolerance")?;
-        let use_sim_time = match set.take("use_sim_time") {
-            None | Some((Value::Null, _)) => false,
-            Some((Value::Bool(b), _)) => b,
-            Some((other, source)) => {
-                return Err(ConfigError::new(
-                    &source,
-                    format!("'use_sim_time' must be true or false, got {}", show(&other)),
-                ))
-            }
-        };
-        Ok(Self {
-            odom_topic,
-            scan_topic,
-            goal_topic,
-            empowerment_topic,
-            reward_topic,
-            markers_topic,
-            evaluate_service,
-            evaluate_batch_service,
-            input_timeout,
-            time_jump_tolerance,
-            use_sim_time,
-        })
+    /// Reads this struct's parameters from the checked values.
+    pub fn from_parameters(p: &Parameters) -> Self {
+        let name = |key: &str| p.text(key).to_owned();
+        Self {
+            odom_topic: name("odom_topic"),
+            scan_topic: name("scan_topic"),
+            goal_topic: name("goal_topic"),
+            empowerment_topic: name("empowerment_topic"),
+            reward_topic: name("reward_topic"),
+            markers_topic: name("markers_topic"),
+            evaluate_service: name("evaluate_service"),
+            evaluate_batch_service: name("evaluate_batch_service"),
+            input_timeout: p.required_double("input_timeout"),
+            time_jump_tolerance: p.required_double("time_jump_tolerance"),
+            use_sim_time: p.flag("use_sim_time"),
+        }
     }
 }
 
 /// Loads the built-in defaults, then each parameters file in order, then the `-p` overrides,
-/// for node `node_name`; validates everything and rejects unknown names.
+/// for node `node_name`, and checks them with [`validate`].
 pub fn load_all(
     paths: &[&Path],
     node_name: &str,
     overrides: &[String],
-) -> Result<(Settings, NodeSettings), ConfigError> {
+) -> Result<(Settings, NodeSettings, Parameters), ConfigError> {
     let mut set = ParameterSet::builtin();
     for path in paths {
         set.merge_file(path, node_name)?;
@@ -608,90 +512,16 @@ pub fn load_all(
     validate(set)
 }
 
-/// Validates a complete parameter set (the built-in defaults with overrides applied) into the
-/// settings; rejects unknown names.
-pub fn validate(mut set: ParameterSet) -> Result<(Settings, NodeSettings), ConfigError> {
-    let node = NodeSettings::take_from(&mut set)?;
-    let settings = Settings::take_from(&mut set)?;
-    let known: Vec<&str> = SETTINGS_PARAMETERS
-        .iter()
-        .chain(&NODE_PARAMETERS)
-        .copied()
-        .collect();
-    set.finish(&known)?;
-    Ok((settings, node))
-}
-
-fn named<T>(
-    set: &mut ParameterSet,
-    name: &str,
-    parse: impl Fn(&str) -> Option<T>,
-    choices: &[&str],
-) -> Result<Option<T>, ConfigError> {
-    let Some((text, source)) = set.take_string(name)? else {
-        return Ok(None);
-    };
-    parse(&text).map(Some).ok_or_else(|| {
-        ConfigError::new(
-            &source,
-            format!(
-                "'{name}' must be one of {}, got \"{text}\"",
-                choices.join(" | ")
-            ),
-        )
-    })
-}
-
-fn positive(set: &mut ParameterSet, name: &str) -> Result<Option<f64>, ConfigError> {
-    let source = set.values.get(name).map(|(_, s)| s.clone());
-    match set.take_f64(name)? {
-        Some(v) if !(v.is_finite() && v > 0.0) => Err(ConfigError::new(
-            &source.unwrap_or_default(),
-            format!("'{name}' must be a positive number, got {v}"),
-        )),
-        other => Ok(other),
-    }
-}
-
-/// A positive number every evaluation needs. NaN, which leaves an optional number unset (the ROS
-/// idiom), is refused here as not finite rather than reported as cleared.
-fn required_positive(set: &mut ParameterSet, name: &str) -> Result<f64, ConfigError> {
-    if let Some((Value::Number(n), source)) = set.values.get(name) {
-        if n.as_f64().is_some_and(f64::is_nan) {
-            return Err(ConfigError::new(
-                source,
-                format!("'{name}' must be a positive number, got NaN (not finite)"),
-            ));
-        }
-    }
-    required(name, positive(set, name)?)
-}
-
-fn finite(set: &mut ParameterSet, name: &str) -> Result<Option<f64>, ConfigError> {
-    let source = set.values.get(name).map(|(_, s)| s.clone());
-    match set.take_f64(name)? {
-        Some(v) if !v.is_finite() => Err(ConfigError::new(
-            &source.unwrap_or_default(),
-            format!("'{name}' must be a finite number, got {v}"),
-        )),
-        other => Ok(other),
-    }
-}
-
-fn bounded_count(
-    set: &mut ParameterSet,
-    name: &str,
-    min: u64,
-    max: u64,
-) -> Result<Option<usize>, ConfigError> {
-    let source = set.values.get(name).map(|(_, s)| s.clone());
-    match set.take_u64(name)? {
-        Some(v) if v < min || v > max => Err(ConfigError::new(
-            &source.unwrap_or_default(),
-            format!("'{name}' must be between {min} and {max}, got {v}"),
-        )),
-        other => Ok(other.map(|v| v as usize)),
-    }
+/// Checks a complete parameter set (the built-in defaults with files and overrides applied,
+/// however they were gathered: [`load_all`] here, the node's `--ros-args` in
+/// [`crate::ros::param_overrides`]) against [`PARAMETERS`], rejects unknown names, and reads the
+/// evaluation's and the node's settings. The checked values come back too: the node declares
+/// them.
+pub fn validate(set: ParameterSet) -> Result<(Settings, NodeSettings, Parameters), ConfigError> {
+    let parameters = set.check()?;
+    let settings = Settings::from_parameters(&parameters)?;
+    let node = NodeSettings::from_parameters(&parameters);
+    Ok((settings, node, parameters))
 }
 
 #[cfg(test)]
@@ -796,11 +626,11 @@ mod tests {
             ),
             (
                 "sampler: uniform",
-                "'sampler' must be one of fourier | chebyshev | bang_bang, got \"uniform\"",
+                "'sampler' must be one of bang_bang | fourier | chebyshev, got \"uniform\"",
             ),
             (
                 "volume_dims: 4",
-                "'volume_dims' must be one of 2 | 3, got \"4\"",
+                "'volume_dims' must be one of 2 | 3, got 4",
             ),
             ("horizn: 1.0", "unknown parameter 'horizn'"),
             // Issue 12, failure 9: NaN said "must be set (... a file or -p cleared it)", and a

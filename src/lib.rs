@@ -16,7 +16,9 @@
 //! 6. [`estimator`] — Algorithm 1 end to end;
 //! 7. [`reward`] — the empowered reward `r_d · log(c · λ)`.
 //!
-//! [`config`] reads the node's `ros__parameters` YAML; [`ros`] holds the ROS message mirrors;
+//! [`parameters`] defines every parameter once (type, default, range, unit, description, live or
+//! read-only); [`config`] reads the node's `ros__parameters` YAML against it; [`ros`] holds the
+//! ROS side;
 //! [`input_file`] reads every file a user names, regular files of bounded size only.
 
 pub mod arena;
@@ -25,6 +27,7 @@ pub mod estimator;
 pub mod input_file;
 pub mod model;
 pub mod occupancy;
+pub mod parameters;
 pub mod plot;
 pub mod reward;
 pub mod rollout;

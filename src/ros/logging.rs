@@ -87,6 +87,8 @@ pub fn init(args: &RosArgs, logger: &str) -> Result<(), String> {
             logger: logger.to_owned(),
         })
         .with_writer(writer)
+        // The builder's own default ceiling is INFO; the level is the Targets filter's to set.
+        .with_max_level(LevelFilter::TRACE)
         .finish()
         .with(Targets::new().with_target("cstep", filter(level_of(args, logger))));
     tracing::subscriber::set_global_default(subscriber)

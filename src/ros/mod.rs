@@ -14,6 +14,7 @@ pub mod markers;
 pub mod messages;
 pub mod node;
 pub mod param_overrides;
+pub mod parameters;
 pub mod rivals;
 pub mod stamps;
 pub mod yaml;

@@ -45,8 +45,9 @@ use super::messages::{
 use super::param_overrides::{ParamOverrides, ParamSource};
 use super::rivals::{self, Claims, Verdict};
 use super::stamps::{Order, StampOrder};
-use crate::config::{validate, NodeSettings, ParameterSet, DEFAULT_NODE_NAME};
+use crate::config::{validate, NodeSettings, ParameterSet, Parameters, DEFAULT_NODE_NAME};
 use crate::estimator::{robot_description, Estimator, EMPOWERMENT_FLOOR};
+use crate::parameters::Value;
 use crate::reward::{empowered_reward, floor_reward, task_reward};
 
 /// Runs the node until `stop` is set: loads the parameters files and `--ros-args`, joins the
@@ -59,7 +60,7 @@ pub fn run(config: &[PathBuf], ros_args: &RosArgs, stop: Arc<AtomicBool>) -> Res
     logging::init(ros_args, &logging::logger_name(&namespace, &node_name))?;
     refuse_security(ros_args)?;
     let fqn = format!("{}/{node_name}", namespace.trim_end_matches('/'));
-    let (settings, interface) = load_parameters(config, ros_args, &fqn)?;
+    let (settings, interface, parameters) = load_parameters(config, ros_args, &fqn)?;
     let estimator = Estimator::from_settings(&settings).map_err(|e| e.to_string())?;
     let status = StatusIdentity {
         // diagnostic_updater's convention: "<node's fully qualified name>: <task>".
@@ -77,7 +78,7 @@ pub fn run(config: &[PathBuf], ros_args: &RosArgs, stop: Arc<AtomicBool>) -> Res
     ));
 
     let context = context_from_env(true)?;
-    let options = parameter_options(&shared, &settings, interface.use_sim_time);
+    let options = parameter_options(&shared, &parameters);
     let mut node = context
         .new_node(
             NodeName::new(&namespace, &node_name).map_err(|e| format!("node name: {e:?}"))?,
@@ -124,7 +125,7 @@ pub fn run(config: &[PathBuf], ros_args: &RosArgs, stop: Arc<AtomicBool>) -> Res
     executor
         .spawn(node.spinner().map_err(|e| format!("{e:?}"))?.spin())
         .detach();
-    let clock = NodeClock::new(interface.use_sim_time);
+    let clock = NodeClock::default();
     smol::block_on(executor.run(serve(&shared, &ports, &node, &guard, &status, &clock)));
     shared.stopping.store(true, Ordering::SeqCst);
     shared.arrived.notify_all();
@@ -161,7 +162,7 @@ fn load_parameters(
     config: &[PathBuf],
     ros_args: &RosArgs,
     fqn: &str,
-) -> Result<(crate::config::Settings, NodeSettings), String> {
+) -> Result<(crate::config::Settings, NodeSettings, Parameters), String> {
     let sources: Vec<ParamSource> = config
         .iter()
         .cloned()
@@ -233,46 +234,36 @@ struct StatusIdentity {
     hardware_id: String,
 }
 
-/// The node's clock, for the diagnostics' stamps: the system clock, or under `use_sim_time`
-/// the newest `/clock` (zero until one arrives, as in rclcpp).
-enum NodeClock {
-    /// The system clock.
-    Wall,
+/// The node's clock, for the diagnostics' stamps: the system clock, or while the node's
+/// `use_sim_time` parameter is true the newest `/clock` (zero until one arrives, as in rclcpp).
+/// `use_sim_time` is live, so the choice is made at each stamp from the node's parameter store,
+/// the one place that sees its sets (ros2-client handles them itself and calls no set action for
+/// it); the newest `/clock` is kept either way, so a switch to sim time stamps with it at once,
+/// as rclcpp's time source does.
+#[derive(Default)]
+struct NodeClock {
     /// The newest `/clock` time.
-    Sim(Mutex<Time>),
+    newest: Mutex<Time>,
 }
 
 impl NodeClock {
-    /// The clock `use_sim_time` asks for.
-    fn new(use_sim_time: bool) -> Self {
-        if use_sim_time {
-            NodeClock::Sim(Mutex::new(Time::default()))
-        } else {
-            NodeClock::Wall
+    /// Now, on the clock `node`'s `use_sim_time` asks for.
+    fn now(&self, node: &Node) -> Time {
+        if node.get_parameter("use_sim_time") == Some(ParameterValue::Boolean(true)) {
+            return *self.newest.lock().unwrap_or_else(|e| e.into_inner());
+        }
+        let since_epoch = std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .unwrap_or_default();
+        Time {
+            sec: since_epoch.as_secs() as i32,
+            nanosec: since_epoch.subsec_nanos(),
         }
     }
 
-    /// Now, on this clock.
-    fn now(&self) -> Time {
-        match self {
-            NodeClock::Wall => {
-                let since_epoch = std::time::SystemTime::now()
-                    .duration_since(std::time::UNIX_EPOCH)
-                    .unwrap_or_default();
-                Time {
-                    sec: since_epoch.as_secs() as i32,
-                    nanosec: since_epoch.subsec_nanos(),
-                }
-            }
-            NodeClock::Sim(time) => *time.lock().unwrap_or_else(|e| e.into_inner()),
-        }
-    }
-
-    /// Takes a `/clock` message (ignored on the system clock).
+    /// Takes a `/clock` message.
     fn tick(&self, clock: &Clock) {
-        if let NodeClock::Sim(time) = self {
-            *time.lock().unwrap_or_else(|e| e.into_inner()) = clock.clock;
-        }
+        *self.newest.lock().unwrap_or_else(|e| e.into_inner()) = clock.clock;
     }
 }
 
@@ -468,41 +459,22 @@ fn failed<E: std::fmt::Debug>(what: &'static str) -> impl FnOnce(E) -> String {
     move |e| format!("cannot create {what}: {e:?}")
 }
 
-/// Declares the live parameter: a `safety_coefficient` change takes effect at the next score.
-/// The others are fixed for the node's life (they shape the control sample and the model).
-/// `use_sim_time` is declared with its configured value, so the parameter services report it.
-fn parameter_options(
-    shared: &Arc<Shared>,
-    settings: &crate::config::Settings,
-    use_sim_time: bool,
-) -> NodeOptions {
+/// Declares every parameter ([`super::parameters`]); a `safety_coefficient` change takes effect
+/// at the next score. The others are read-only (they shape the control sample, the model and
+/// the topics), but `use_sim_time`, which ros2-client keeps itself ([`NodeClock`] reads it).
+fn parameter_options(shared: &Arc<Shared>, parameters: &Parameters) -> NodeOptions {
     let live = shared.clone();
-    NodeOptions::new()
+    let options = NodeOptions::new()
         .enable_rosout(false)
-        .start_parameter_services(true)
-        .declare_parameter("use_sim_time", ParameterValue::Boolean(use_sim_time))
-        .declare_parameter(
-            "safety_coefficient",
-            ParameterValue::Double(settings.safety_coefficient),
-        )
-        .parameter_validator(Box::new(|name, value| match (name, value) {
-            ("safety_coefficient", ParameterValue::Double(c)) if c.is_finite() && *c > 0.0 => {
-                Ok(())
-            }
-            ("safety_coefficient", other) => Err(format!(
-                "safety_coefficient must be a positive double, got {other:?}"
-            )),
-            (other, _) => Err(format!("'{other}' cannot be changed while the node runs")),
-        }))
-        .parameter_set_action(Box::new(move |name, value| {
-            if let ("safety_coefficient", ParameterValue::Double(c)) = (name, value) {
-                *live
-                    .safety_coefficient
-                    .lock()
-                    .unwrap_or_else(|e| e.into_inner()) = *c;
-            }
-            Ok(())
-        }))
+        .start_parameter_services(true);
+    super::parameters::declare(options, parameters, move |p, value| {
+        if let ("safety_coefficient", Value::Double(c)) = (p.name, value) {
+            *live
+                .safety_coefficient
+                .lock()
+                .unwrap_or_else(|e| e.into_inner()) = *c;
+        }
+    })
 }
 
 /// The DDS-side tasks: keep the newest odometry and goal, post scans, answer the service,
@@ -577,7 +549,7 @@ async fn serve(
             // Diagnostics are best effort: a full queue must not stop the node.
             let _ = ports
                 .diagnostics
-                .publish(shared.diagnostics(status, clock.now()));
+                .publish(shared.diagnostics(status, clock.now(node)));
         }
     };
     let rivals = async {

@@ -15,6 +15,8 @@ from conftest import REPO, wait_until
 from diagnostic_msgs.msg import DiagnosticArray
 from node_rig import CONFIG, RELIABLE, cstep_binary, stop_gently
 from rclpy.node import Node
+from rclpy.parameter import Parameter
+from rclpy.parameter_client import AsyncParameterClient
 from rosgraph_msgs.msg import Clock
 
 STARTED = "cstep node /"
@@ -121,3 +123,48 @@ def test_diagnostics_are_named_for_the_node_and_stamped_with_its_clock(
         assert diagnostics.header.stamp.sec == 4242
     else:
         assert abs(stamp - time.time()) < 10  # the wall clock, no longer (0, 0)
+
+
+def test_use_sim_time_set_while_running_switches_the_diagnostics_clock(
+    ros_domain, ros_context, executor
+):
+    """`use_sim_time` is live (src/parameters.rs): a set over the parameter services switches the
+    diagnostics' stamps from the wall clock to the newest /clock and back, as rclcpp's time
+    source does."""
+    proc, log_path = start(ros_domain, tag="diag-live")
+    node = Node("cstep_sim_time_probe", context=ros_context)
+    executor.add_node(node)
+    try:
+        received: list[DiagnosticArray] = []
+        node.create_subscription(DiagnosticArray, "/diagnostics", received.append, RELIABLE)
+        clock = node.create_publisher(Clock, "/clock", 10)
+        client = AsyncParameterClient(node, "/cstep_node")
+        wait_until(client.services_are_ready, "the node's parameter services", executor)
+        wait_until(lambda: bool(received), "diagnostics", executor)
+        assert proc.poll() is None, log_path.read_text()
+
+        def set_use_sim_time(on: bool) -> None:
+            future = client.set_parameters([Parameter("use_sim_time", value=on)])
+            wait_until(future.done, "set use_sim_time", executor)
+            (result,) = future.result().results
+            assert result.successful, result.reason
+
+        def stamped_with(sec: int) -> bool:
+            clock.publish(Clock(clock=Time(sec=sec, nanosec=5)))
+            return any(d.header.stamp.sec == sec for d in received)
+
+        # On the wall clock, a published /clock does not stamp the diagnostics.
+        end = time.monotonic() + 2.5
+        while time.monotonic() < end:
+            assert not stamped_with(4242), "stamped with /clock before use_sim_time was set"
+            executor.spin_once(timeout_sec=0.05)
+        set_use_sim_time(True)
+        wait_until(lambda: stamped_with(4242), "diagnostics stamped with /clock", executor, 15)
+        set_use_sim_time(False)
+        received.clear()
+        wait_until(lambda: len(received) >= 2, "diagnostics after the switch back", executor)
+        stamp = received[-1].header.stamp
+        assert abs(stamp.sec + stamp.nanosec * 1e-9 - time.time()) < 10
+    finally:
+        node.destroy_node()
+        stop_gently(proc)

@@ -1,0 +1,629 @@
+//! Every parameter cstep reads, defined once: name, type and accepted values, default, unit,
+//! description, and whether it may change while the node runs.
+//!
+//! [`PARAMETERS`] drives the validation of parameter files and `-p` overrides
+//! ([`crate::config`]), the node's parameter declarations and their ROS 2 descriptors
+//! (`ros::parameters`), and the parameter table of the README and `config/cstep.yaml`, which
+//! `tests/parameter_docs.rs` writes from it (`CSTEP_WRITE_DOCS=1`) and otherwise checks, so none
+//! of them can drift from the table.
+
+use serde_norway::Value as Yaml;
+
+/// A parameter value, typed as ROS 2 types parameters.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Value {
+    /// A ROS `bool`.
+    Bool(bool),
+    /// A ROS `integer` (64-bit).
+    Integer(i64),
+    /// A ROS `double`.
+    Double(f64),
+    /// A ROS `string`.
+    Text(String),
+}
+
+/// The ROS 2 parameter type a parameter has.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Kind {
+    /// `bool`.
+    Bool,
+    /// `integer`.
+    Integer,
+    /// `double`.
+    Double,
+    /// `string`.
+    String,
+}
+
+impl Kind {
+    /// The type's name as `ros2 param describe` prints it.
+    pub fn name(self) -> &'static str {
+        match self {
+            Kind::Bool => "bool",
+            Kind::Integer => "integer",
+            Kind::Double => "double",
+            Kind::String => "string",
+        }
+    }
+}
+
+/// The values a parameter accepts.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Rule {
+    /// `true` or `false`.
+    Bool,
+    /// A whole number in `min..=max`.
+    Integer {
+        /// The smallest accepted value.
+        min: i64,
+        /// The largest accepted value.
+        max: i64,
+    },
+    /// A finite number greater than 0; with `optional`, `.nan` (or null) leaves it unset.
+    Positive {
+        /// Whether `.nan` means "not set" (the ROS idiom for an optional double).
+        optional: bool,
+    },
+    /// Any finite number, or `.nan` (or null): unset.
+    OptionalFinite,
+    /// One of these words.
+    Choice(&'static [&'static str]),
+    /// A ROS topic or service name: not empty, no spaces.
+    RosName,
+    /// A file path, relative to the parameters file that sets it, or a `builtin:` name.
+    Path,
+}
+
+impl Rule {
+    /// The ROS 2 type of the values this rule accepts.
+    pub fn kind(self) -> Kind {
+        match self {
+            Rule::Bool => Kind::Bool,
+            Rule::Integer { .. } => Kind::Integer,
+            Rule::Positive { .. } | Rule::OptionalFinite => Kind::Double,
+            Rule::Choice(_) | Rule::RosName | Rule::Path => Kind::String,
+        }
+    }
+
+    /// The accepted values in words (`> 0`, `1 to 100000`, `quadrotor | point_mass`).
+    pub fn constraint(self) -> String {
+        match self {
+            Rule::Bool => "true | false".into(),
+            Rule::Integer { min, max } if max - min == 1 => format!("{min} | {max}"),
+            Rule::Integer { min, max } => format!("{min} to {max}"),
+            Rule::Positive { optional: false } => "> 0".into(),
+            Rule::Positive { optional: true } => "> 0, or .nan: unset".into(),
+            Rule::OptionalFinite => "finite, or .nan: unset".into(),
+            Rule::Choice(words) => words.join(" | "),
+            Rule::RosName => "a ROS name, no spaces".into(),
+            Rule::Path => "a file path (relative to the parameters file) or builtin:NAME".into(),
+        }
+    }
+}
+
+/// Whether a parameter may change while the node runs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Change {
+    /// Settable through the parameter services; takes effect at the next scan.
+    Live,
+    /// Fixed for the node's life: set it in a parameters file or with `-p` at start.
+    ReadOnly,
+}
+
+/// One parameter's definition.
+#[derive(Debug, Clone, Copy)]
+pub struct Parameter {
+    /// The name in parameter files, `-p` overrides and the parameter services.
+    pub name: &'static str,
+    /// The values it accepts (and so its ROS type).
+    pub rule: Rule,
+    /// The default, as it reads in a parameters file (`1.0`, `.nan`, `quadrotor`).
+    pub default: &'static str,
+    /// The unit of a number (`s`, `m`, `m/s²`), if it has one.
+    pub unit: Option<&'static str>,
+    /// What it means, for people: the README, `config/cstep.yaml`, `ros2 param describe`.
+    pub description: &'static str,
+    /// Whether it may change while the node runs.
+    pub change: Change,
+}
+
+/// The marker path `robot_description` takes for the compiled-in Crazyflie 2.x URDF.
+pub const BUILTIN_URDF_PATH: &str = "builtin:cf2x.urdf";
+
+/// Largest accepted trajectory count: beyond it an evaluation takes seconds.
+const MAX_TRAJECTORIES: i64 = 100_000;
+/// Largest accepted step count: beyond it an evaluation takes seconds.
+const MAX_STEPS: i64 = 10_000;
+
+/// Every parameter, in the order the README and `config/cstep.yaml` list them: the evaluation's
+/// first, then the node's ROS interface. The names are a contract with users' parameter files.
+pub const PARAMETERS: &[Parameter] = &[
+    Parameter {
+        name: "robot_description",
+        rule: Rule::Path,
+        default: BUILTIN_URDF_PATH,
+        unit: None,
+        description: "The robot: a URDF with a <properties> element (arm, kf, km, \
+            thrust2weight, ...). builtin:cf2x.urdf is the compiled-in Crazyflie 2.x, the file \
+            urdf/cf2x.urdf.",
+        change: Change::ReadOnly,
+    },
+    Parameter {
+        name: "model",
+        rule: Rule::Choice(&["quadrotor", "point_mass"]),
+        default: "quadrotor",
+        unit: None,
+        description: "Dynamics: quadrotor (6-DoF rigid body, motors, attitude controller) or \
+            point_mass (the paper prototype's double integrator).",
+        change: Change::ReadOnly,
+    },
+    Parameter {
+        name: "horizon",
+        rule: Rule::Positive { optional: false },
+        default: "1.0",
+        unit: Some("s"),
+        description: "Horizon T. The paper's heuristic: the worst-case stopping time from \
+            maximum speed.",
+        change: Change::ReadOnly,
+    },
+    Parameter {
+        name: "trajectories",
+        rule: Rule::Integer {
+            min: 1,
+            max: MAX_TRAJECTORIES,
+        },
+        default: "150",
+        unit: None,
+        description: "Sampled control trajectories N (the paper: 150).",
+        change: Change::ReadOnly,
+    },
+    Parameter {
+        name: "steps",
+        rule: Rule::Integer {
+            min: 1,
+            max: MAX_STEPS,
+        },
+        default: "100",
+        unit: None,
+        description: "RK4 steps per trajectory (the paper: 100 points). With trajectories, the \
+            control sample (trajectories × steps × volume_dims floats of 4 bytes) must fit the \
+            256 MiB an evaluation may allocate, e.g. 100000 × 335 in 2D; beyond it cstep eval, \
+            bench and node refuse to start, naming the values and the budget.",
+        change: Change::ReadOnly,
+    },
+    Parameter {
+        name: "sampler",
+        rule: Rule::Choice(&["bang_bang", "fourier", "chebyshev"]),
+        default: "bang_bang",
+        unit: None,
+        description: "Control sampler: bang_bang (covers the admissible set), fourier (the \
+            paper's prototype) or chebyshev.",
+        change: Change::ReadOnly,
+    },
+    Parameter {
+        name: "seed",
+        rule: Rule::Integer {
+            min: 0,
+            max: i64::MAX,
+        },
+        default: "0",
+        unit: None,
+        description: "Seed of the control sample. The same sample is reused for every \
+            evaluation (common random numbers), so consecutive scores differ only because the \
+            robot and its surroundings did.",
+        change: Change::ReadOnly,
+    },
+    Parameter {
+        name: "safety_coefficient",
+        rule: Rule::Positive { optional: false },
+        default: "1.0",
+        unit: None,
+        description: "Safety coefficient c of the reward r = r_d · log(c · free_volume): \
+            smaller is more cautious.",
+        change: Change::Live,
+    },
+    Parameter {
+        name: "volume_dims",
+        rule: Rule::Integer { min: 2, max: 3 },
+        default: "2",
+        unit: None,
+        description: "Volumes in 2 dimensions (areas at a held altitude, as in the paper's \
+            drone experiment) or 3.",
+        change: Change::ReadOnly,
+    },
+    Parameter {
+        name: "estimator",
+        rule: Rule::Choice(&["free_fraction", "hull", "efron"]),
+        default: "free_fraction",
+        unit: None,
+        description: "Free-volume estimator: free_fraction (de-biased hull of all endpoints \
+            times the share of it nearest to free endpoints; right also when terminal endpoints \
+            surround the free ones, as they do whenever the robot can reach past what its scan \
+            shows), hull (the paper: hull of all endpoints minus the union of hulls of clustered \
+            terminal endpoints; collapses to zero in that case) or efron (hull, de-biased).",
+        change: Change::ReadOnly,
+    },
+    Parameter {
+        name: "robot_radius",
+        rule: Rule::Positive { optional: true },
+        default: ".nan",
+        unit: Some("m"),
+        description: "Robot disk radius for collision checks; .nan: from the URDF's collision \
+            geometry (0.06 m for the Crazyflie).",
+        change: Change::ReadOnly,
+    },
+    Parameter {
+        name: "max_acceleration",
+        rule: Rule::Positive { optional: true },
+        default: "5.0",
+        unit: Some("m/s²"),
+        description: "Bound on the commanded acceleration per axis; it sets how far the \
+            horizon reaches (A·T²/2 each way). 5.0 reaches ±2.5 m in 1 s, matching the paper's \
+            3 m LiDAR: at the Crazyflie's full authority (17.3 m/s², ±8 m) nearly every \
+            trajectory leaves the sensed space and the score stops telling states apart. .nan: \
+            the model's own bound (quadrotor: full authority from the URDF; point mass: the \
+            prototype's 10.41 = 9.81 + 0.6).",
+        change: Change::ReadOnly,
+    },
+    Parameter {
+        name: "unknown_space",
+        rule: Rule::Choice(&["occupied", "free"]),
+        default: "occupied",
+        unit: None,
+        description: "Space the scan says nothing about (beyond range, unseen bearings, \
+            invalid beams): occupied (conservative) or free.",
+        change: Change::ReadOnly,
+    },
+    Parameter {
+        name: "floor_height",
+        rule: Rule::OptionalFinite,
+        default: ".nan",
+        unit: Some("m"),
+        description: "Floor height (odometry frame) for 3D checks; .nan: none.",
+        change: Change::ReadOnly,
+    },
+    Parameter {
+        name: "ceiling_height",
+        rule: Rule::OptionalFinite,
+        default: ".nan",
+        unit: Some("m"),
+        description: "Ceiling height (odometry frame) for 3D checks; .nan: none.",
+        change: Change::ReadOnly,
+    },
+    Parameter {
+        name: "odom_topic",
+        rule: Rule::RosName,
+        default: "odom",
+        unit: None,
+        description: "nav_msgs/Odometry input. Names without a leading / are relative to the \
+            node's namespace; every topic and service name can also be remapped with -r.",
+        change: Change::ReadOnly,
+    },
+    Parameter {
+        name: "scan_topic",
+        rule: Rule::RosName,
+        default: "scan",
+        unit: None,
+        description: "sensor_msgs/LaserScan input (sensor-data QoS); one evaluation per scan.",
+        change: Change::ReadOnly,
+    },
+    Parameter {
+        name: "goal_topic",
+        rule: Rule::RosName,
+        default: "goal_pose",
+        unit: None,
+        description: "Optional geometry_msgs/PoseStamped goal for the task reward.",
+        change: Change::ReadOnly,
+    },
+    Parameter {
+        name: "empowerment_topic",
+        rule: Rule::RosName,
+        default: "cstep/empowerment",
+        unit: None,
+        description: "cstep_msgs/Empowerment output.",
+        change: Change::ReadOnly,
+    },
+    Parameter {
+        name: "reward_topic",
+        rule: Rule::RosName,
+        default: "cstep/reward",
+        unit: None,
+        description: "cstep_msgs/EmpoweredReward output.",
+        change: Change::ReadOnly,
+    },
+    Parameter {
+        name: "markers_topic",
+        rule: Rule::RosName,
+        default: "cstep/markers",
+        unit: None,
+        description: "visualization_msgs/MarkerArray of the sampled endpoints and their hull, \
+            in the odometry frame; built and published only while someone subscribes.",
+        change: Change::ReadOnly,
+    },
+    Parameter {
+        name: "evaluate_service",
+        rule: Rule::RosName,
+        default: "cstep/evaluate",
+        unit: None,
+        description: "cstep_msgs/srv/Evaluate: one state in, its score out, synchronously.",
+        change: Change::ReadOnly,
+    },
+    Parameter {
+        name: "evaluate_batch_service",
+        rule: Rule::RosName,
+        default: "cstep/evaluate_batch",
+        unit: None,
+        description: "cstep_msgs/srv/EvaluateBatch: K states per call, scored in parallel; one \
+            round trip per vector step for RL loops with several simulations.",
+        change: Change::ReadOnly,
+    },
+    Parameter {
+        name: "input_timeout",
+        rule: Rule::Positive { optional: false },
+        default: "0.5",
+        unit: Some("s"),
+        description: "Odometry older than this when a scan arrives is stale: no score, \
+            diagnostics STALE.",
+        change: Change::ReadOnly,
+    },
+    Parameter {
+        name: "time_jump_tolerance",
+        rule: Rule::Positive { optional: false },
+        default: "1.0",
+        unit: Some("s"),
+        description: "A scan stamped more than this before the newest one scored means time \
+            jumped back (a simulation reset, a bag replayed): the stamp ordering is reset and \
+            scoring goes on. Up to it, an older scan is a late delivery and skipped.",
+        change: Change::ReadOnly,
+    },
+    Parameter {
+        name: "use_sim_time",
+        rule: Rule::Bool,
+        default: "false",
+        unit: None,
+        description: "Use the /clock topic's time for the node's clock (simulation), which \
+            stamps the diagnostics. Scores carry their scan's stamp either way.",
+        change: Change::Live,
+    },
+];
+
+/// The definition of parameter `name`, if there is one.
+pub fn find(name: &str) -> Option<&'static Parameter> {
+    PARAMETERS.iter().find(|p| p.name == name)
+}
+
+impl Parameter {
+    /// Checks a value read from a parameters file or `-p` against this parameter's rule:
+    /// the typed value, `None` when an optional one is unset (null or `.nan`), or what is wrong
+    /// in one line naming the parameter and the value.
+    pub fn check(&self, value: &Yaml) -> Result<Option<Value>, String> {
+        let name = self.name;
+        let nan = matches!(value, Yaml::Number(n) if n.as_f64().is_some_and(f64::is_nan));
+        if matches!(value, Yaml::Null) || nan {
+            return match self.rule {
+                Rule::Positive { optional: true } | Rule::OptionalFinite => Ok(None),
+                Rule::Positive { optional: false } if nan => Err(format!(
+                    "'{name}' must be a positive number, got NaN (not finite)"
+                )),
+                _ => Err(format!(
+                    "'{name}' must be set (the built-in default sets it; a file or -p cleared it)"
+                )),
+            };
+        }
+        match self.rule {
+            Rule::Bool => match value {
+                Yaml::Bool(b) => Ok(Some(Value::Bool(*b))),
+                other => Err(format!(
+                    "'{name}' must be true or false, got {}",
+                    show(other)
+                )),
+            },
+            Rule::Integer { min, max } => match value {
+                Yaml::Number(n) if n.is_i64() || n.is_u64() => match n.as_i64() {
+                    Some(v) if (min..=max).contains(&v) => Ok(Some(Value::Integer(v))),
+                    _ if max - min == 1 => Err(format!(
+                        "'{name}' must be one of {min} | {max}, got {}",
+                        show(value)
+                    )),
+                    _ => Err(format!(
+                        "'{name}' must be between {min} and {max}, got {}",
+                        show(value)
+                    )),
+                },
+                other => Err(format!(
+                    "'{name}' must be a whole number ({}), got {}",
+                    self.rule.constraint(),
+                    show(other)
+                )),
+            },
+            Rule::Positive { .. } | Rule::OptionalFinite => {
+                let Yaml::Number(n) = value else {
+                    return Err(format!("'{name}' must be a number, got {}", show(value)));
+                };
+                let v = n.as_f64().unwrap_or(f64::NAN);
+                match self.rule {
+                    Rule::Positive { .. } if !(v.is_finite() && v > 0.0) => {
+                        Err(format!("'{name}' must be a positive number, got {v}"))
+                    }
+                    Rule::OptionalFinite if !v.is_finite() => {
+                        Err(format!("'{name}' must be a finite number, got {v}"))
+                    }
+                    _ => Ok(Some(Value::Double(v))),
+                }
+            }
+            Rule::Choice(words) => {
+                let text = text(value)
+                    .ok_or_else(|| format!("'{name}' must be a string, got {}", show(value)))?;
+                if words.contains(&text.as_str()) {
+                    Ok(Some(Value::Text(text)))
+                } else {
+                    Err(format!(
+                        "'{name}' must be one of {}, got \"{text}\"",
+                        words.join(" | ")
+                    ))
+                }
+            }
+            Rule::RosName => {
+                let text = text(value)
+                    .ok_or_else(|| format!("'{name}' must be a string, got {}", show(value)))?;
+                if text.is_empty() || text.contains(char::is_whitespace) {
+                    return Err(format!(
+                        "'{name}' must be a ROS name without spaces, got \"{text}\""
+                    ));
+                }
+                Ok(Some(Value::Text(text)))
+            }
+            Rule::Path => text(value)
+                .map(|t| Some(Value::Text(t)))
+                .ok_or_else(|| format!("'{name}' must be a string, got {}", show(value))),
+        }
+    }
+
+    /// The default, checked like any other value (the table's tests prove each passes).
+    pub fn default_value(&self) -> Result<Option<Value>, String> {
+        let yaml: Yaml = serde_norway::from_str(self.default)
+            .map_err(|e| format!("'{}': default {}: {e}", self.name, self.default))?;
+        self.check(&yaml)
+    }
+}
+
+/// A string value; numbers are read as text too (`sampler: 2` reads "2").
+fn text(value: &Yaml) -> Option<String> {
+    match value {
+        Yaml::String(s) => Some(s.clone()),
+        Yaml::Number(n) => Some(n.to_string()),
+        _ => None,
+    }
+}
+
+/// A value as it reads in a one-line error: scalars as YAML (`soon`, `true`), lists and maps in
+/// flow style (`[1,2]`), never the block YAML that would span lines.
+pub fn show(value: &Yaml) -> String {
+    let text = match value {
+        Yaml::Sequence(_) | Yaml::Mapping(_) | Yaml::Tagged(_) => serde_json::to_string(value).ok(),
+        _ => serde_norway::to_string(value).ok(),
+    };
+    text.map(|s| s.trim().to_owned())
+        .filter(|s| !s.contains('\n'))
+        .unwrap_or_else(|| format!("{value:?}"))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_default_passes_its_own_rule_and_has_its_type() {
+        for p in PARAMETERS {
+            let value = p.default_value().unwrap_or_else(|e| panic!("{e}"));
+            let kind = value.as_ref().map(|v| match v {
+                Value::Bool(_) => Kind::Bool,
+                Value::Integer(_) => Kind::Integer,
+                Value::Double(_) => Kind::Double,
+                Value::Text(_) => Kind::String,
+            });
+            assert!(kind.is_none_or(|k| k == p.rule.kind()), "{}", p.name);
+        }
+    }
+
+    #[test]
+    fn names_are_unique_and_every_parameter_is_described() {
+        let mut names: Vec<_> = PARAMETERS.iter().map(|p| p.name).collect();
+        names.sort_unstable();
+        names.dedup();
+        assert_eq!(names.len(), PARAMETERS.len());
+        for p in PARAMETERS {
+            assert!(p.description.ends_with('.'), "{}", p.name);
+            assert!(!p.description.contains("  "), "{}", p.name);
+            assert_eq!(find(p.name).map(|f| f.name), Some(p.name));
+        }
+        assert!(find("horizn").is_none());
+    }
+
+    #[test]
+    fn each_rule_accepts_its_values_and_refuses_others_naming_both() {
+        let yaml = |s: &str| -> Yaml { serde_norway::from_str(s).unwrap() };
+        let check = |name: &str, value: &str| find(name).unwrap().check(&yaml(value));
+        assert_eq!(check("horizon", "0.5"), Ok(Some(Value::Double(0.5))));
+        assert_eq!(check("trajectories", "7"), Ok(Some(Value::Integer(7))));
+        assert_eq!(check("volume_dims", "3"), Ok(Some(Value::Integer(3))));
+        assert_eq!(check("robot_radius", ".nan"), Ok(None));
+        assert_eq!(check("floor_height", "-1.5"), Ok(Some(Value::Double(-1.5))));
+        assert_eq!(check("use_sim_time", "true"), Ok(Some(Value::Bool(true))));
+        assert_eq!(
+            check("model", "point_mass"),
+            Ok(Some(Value::Text("point_mass".into())))
+        );
+        let refusals = [
+            (
+                "horizon",
+                "-1",
+                "'horizon' must be a positive number, got -1",
+            ),
+            ("horizon", "soon", "'horizon' must be a number, got soon"),
+            (
+                "horizon",
+                ".nan",
+                "'horizon' must be a positive number, got NaN (not finite)",
+            ),
+            ("horizon", "[1, 2]", "'horizon' must be a number, got [1,2]"),
+            (
+                "horizon",
+                "~",
+                "'horizon' must be set (the built-in default sets it; a file or -p cleared it)",
+            ),
+            (
+                "trajectories",
+                "0",
+                "'trajectories' must be between 1 and 100000, got 0",
+            ),
+            (
+                "trajectories",
+                "1.5",
+                "'trajectories' must be a whole number (1 to 100000), got 1.5",
+            ),
+            (
+                "seed",
+                "-1",
+                "'seed' must be between 0 and 9223372036854775807, got -1",
+            ),
+            (
+                "seed",
+                "18446744073709551615",
+                "'seed' must be between 0 and 9223372036854775807, got 18446744073709551615",
+            ),
+            (
+                "volume_dims",
+                "4",
+                "'volume_dims' must be one of 2 | 3, got 4",
+            ),
+            (
+                "sampler",
+                "uniform",
+                "'sampler' must be one of bang_bang | fourier | chebyshev, got \"uniform\"",
+            ),
+            (
+                "floor_height",
+                ".inf",
+                "'floor_height' must be a finite number, got inf",
+            ),
+            (
+                "use_sim_time",
+                "yes please",
+                "'use_sim_time' must be true or false, got yes please",
+            ),
+            (
+                "scan_topic",
+                "'my scan'",
+                "'scan_topic' must be a ROS name without spaces, got \"my scan\"",
+            ),
+        ];
+        for (name, value, expected) in refusals {
+            assert_eq!(
+                check(name, value),
+                Err(expected.to_owned()),
+                "{name}: {value}"
+            );
+        }
+    }
+}

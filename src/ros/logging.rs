@@ -10,7 +10,6 @@
 //! start-up rather than silently ignored.
 
 use std::fmt;
-use std::time::{SystemTime, UNIX_EPOCH};
 
 use tracing::{Event, Level, Subscriber};
 use tracing_subscriber::filter::{LevelFilter, Targets};
@@ -21,6 +20,7 @@ use tracing_subscriber::layer::SubscriberExt;
 use tracing_subscriber::registry::LookupSpan;
 
 use super::args::{LogLevel, RosArgs};
+use super::messages::Time;
 
 /// rcl's logger name for node `node` in `namespace`: `drone1.cstep_node`, or `cstep_node` in the
 /// root namespace.
@@ -133,15 +133,11 @@ where
             Level::INFO => "INFO",
             Level::DEBUG | Level::TRACE => "DEBUG",
         };
-        let now = SystemTime::now()
-            .duration_since(UNIX_EPOCH)
-            .unwrap_or_default();
+        let now = Time::wall_clock_now();
         write!(
             writer,
             "[{severity}] [{}.{:09}] [{}]: ",
-            now.as_secs(),
-            now.subsec_nanos(),
-            self.logger
+            now.sec, now.nanosec, self.logger
         )?;
         ctx.field_format().format_fields(writer.by_ref(), event)?;
         writeln!(writer)

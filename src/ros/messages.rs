@@ -18,6 +18,18 @@ pub struct Time {
 }
 
 impl Time {
+    /// The system clock's time now (since the Unix epoch), as ROS's wall clock reads it: the
+    /// stamp of diagnostics without sim time and of log lines.
+    pub fn wall_clock_now() -> Self {
+        let since_epoch = std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .unwrap_or_default();
+        Self {
+            sec: since_epoch.as_secs() as i32,
+            nanosec: since_epoch.subsec_nanos(),
+        }
+    }
+
     /// The time in seconds.
     pub fn seconds(self) -> f64 {
         self.sec as f64 + self.nanosec as f64 * 1e-9

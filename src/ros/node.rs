@@ -252,13 +252,7 @@ impl NodeClock {
         if node.get_parameter("use_sim_time") == Some(ParameterValue::Boolean(true)) {
             return *self.newest.lock().unwrap_or_else(|e| e.into_inner());
         }
-        let since_epoch = std::time::SystemTime::now()
-            .duration_since(std::time::UNIX_EPOCH)
-            .unwrap_or_default();
-        Time {
-            sec: since_epoch.as_secs() as i32,
-            nanosec: since_epoch.subsec_nanos(),
-        }
+        Time::wall_clock_now()
     }
 
     /// Takes a `/clock` message.

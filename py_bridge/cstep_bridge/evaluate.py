@@ -7,7 +7,9 @@ Models with the same label (``--label``, or by default the agent and its c from 
 ``unempowered``, ``empowered c=0.5``) are one agent trained with several seeds. Every model flies
 every configuration of the environment's fixed evaluation set (the drone: the 100 arenas of
 ``data/drone_eval_set.json``; the maze: its 18 start × goal combinations) with its deterministic
-policy. Evaluation needs no reward, so no ``cstep node`` runs. Writes to ``--out``:
+policy. Evaluation needs no reward, so no ``cstep node`` runs. ``--cache DIR`` keeps each
+model's episodes (:mod:`cstep_bridge.episode_cache`): a re-run flies only what it lacks.
+Writes to ``--out``:
 
 - ``results.md``: the paper's tables — success rate and average clear time; mean time per episode
   within 0.1 … 0.5 m of an obstacle; its decrease relative to the first agent (the baseline); for
@@ -42,10 +44,13 @@ import numpy as np
 
 from . import comparison, metrics, paper_results, training_log
 from .envs import ENV_NAMES, make_env
+from .episode_cache import EpisodeCache, entry_key
 from .paper_results import PaperAgent
 from .plots import MapPanel, Path2D, paths_figure, threshold_figure, training_curves
 
 FINE_THRESHOLDS = tuple(np.round(np.arange(0.05, 0.501, 0.025), 3))
+CHUNK = 10
+"""Episodes a worker flies per task: the grain at which a cached evaluation resumes."""
 DRONE_PANELS = 6
 
 
@@ -196,15 +201,32 @@ def fly(
 
 
 def evaluate_agent(
-    agent: Agent, env: str, indices: list[int], jobs: int, eval_set: Path | None = None
+    agent: Agent,
+    env: str,
+    indices: list[int],
+    jobs: int,
+    eval_set: Path | None = None,
+    cache: EpisodeCache | None = None,
 ) -> list[metrics.Episode]:
-    """All of ``indices`` for one agent, split over ``jobs`` worker processes."""
-    chunks = [c.tolist() for c in np.array_split(indices, jobs) if len(c)]
-    k = len(chunks)
-    with ProcessPoolExecutor(k, mp_context=get_context("spawn")) as pool:
-        parts = pool.map(fly, [agent.model] * k, [env] * k, chunks, [eval_set] * k)
-        episodes = [e for part in parts for e in part]
-    return sorted(episodes, key=lambda e: e.config)
+    """All of ``indices`` for one agent, over ``jobs`` worker processes; with a ``cache``, only
+    those it does not hold yet, each chunk of :data:`CHUNK` stored as soon as it is flown."""
+    key = entry_key(agent.model, env, eval_set) if cache else ""
+    done = cache.load(key) if cache else {}
+    missing = [i for i in indices if i not in done]
+    if cache and len(missing) < len(indices):
+        print(
+            f"  {len(indices) - len(missing)} of {len(indices)} episodes from the cache", flush=True
+        )
+    if missing:
+        chunks = [missing[i : i + CHUNK] for i in range(0, len(missing), CHUNK)]
+        k = min(jobs, len(chunks))
+        with ProcessPoolExecutor(k, mp_context=get_context("spawn")) as pool:
+            n = len(chunks)
+            for part in pool.map(fly, [agent.model] * n, [env] * n, chunks, [eval_set] * n):
+                done.update((e.config, e) for e in part)
+                if cache:
+                    cache.store(key, done)
+    return [done[i] for i in indices]
 
 
 def clear_x(env: str) -> float | None:
@@ -433,6 +455,12 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     )
     ap.add_argument("--episodes", type=int, help="only the first N configurations")
     ap.add_argument("--jobs", type=int, default=1, help="worker processes per agent")
+    ap.add_argument(
+        "--cache",
+        type=Path,
+        help="keep every model's episodes in this directory and fly only those it lacks: a re-run "
+        "with one more model flies only that one, an interrupted run resumes",
+    )
     ap.add_argument("--out", type=Path, required=True, help="directory for results and plots")
     args = ap.parse_args(argv)
     if args.label and len(args.label) != len(args.model):
@@ -458,13 +486,14 @@ def main(argv: list[str] | None = None) -> int:
         raise SystemExit(str(err)) from err
     indices = list(range(min(n, args.episodes or n)))
     line = clear_x(env)
+    cache = EpisodeCache(args.cache) if args.cache else None
     runs: dict[str, list[list[metrics.Episode]]] = {}
     summaries, intervals, tests = {}, {}, {}
     for label, seeds in groups.items():
         runs[label] = []
         for model in seeds:
             print(f"{label}: {len(indices)} episodes on {env} ({model.model})", flush=True)
-            runs[label].append(evaluate_agent(model, env, indices, args.jobs, args.eval_set))
+            runs[label].append(evaluate_agent(model, env, indices, args.jobs, args.eval_set, cache))
             s = metrics.summarize(runs[label][-1], line)
             print(
                 f"  success {s.success_rate:.0%}, collisions {s.collision_rate:.0%}, "

@@ -2,6 +2,7 @@
 the empowered agent a real `cstep node` over real DDS (on a private domain, shared by its envs)."""
 
 import json
+import pickle
 import shutil
 from pathlib import Path
 
@@ -244,3 +245,34 @@ def test_the_rollout_line_reports_the_share_of_clipped_actions(log_std, low, hig
     line = next(ln for ln in proc.stdout.splitlines() if ln.startswith("steps"))
     clipped = float(line.split("clipped")[1].split("%")[0])
     assert low <= clipped <= high, line
+
+
+def test_evaluation_cache_flies_only_the_episodes_it_lacks(drone_run, tmp_path):
+    cache = tmp_path / "cache"
+    model = ["--model", str(drone_run)]
+    run("evaluate", *model, "--episodes", "2", "--out", str(tmp_path / "plain"))
+    run("evaluate", *model, "--episodes", "2", "--cache", str(cache), "--out", str(tmp_path / "a"))
+    plain = json.loads((tmp_path / "plain" / "results.json").read_text())["episodes"]
+    first = json.loads((tmp_path / "a" / "results.json").read_text())["episodes"]
+    assert first == plain  # the cache changes nothing flown
+    (entry,) = cache.glob("*.pkl")
+    # Mark the cached configuration 0 as a success it was not: a re-run with one more
+    # configuration must take 0 and 1 from the cache (so the mark shows) and fly only 2.
+    stored = pickle.loads(entry.read_bytes())
+    assert sorted(stored) == [0, 1] and not stored[0].success
+    stored[0].success = True
+    entry.write_bytes(pickle.dumps(stored))
+    proc = run(
+        "evaluate", *model, "--episodes", "3", "--cache", str(cache), "--out", str(tmp_path / "b")
+    )
+    assert "2 of 3 episodes from the cache" in proc.stdout
+    again = json.loads((tmp_path / "b" / "results.json").read_text())["episodes"]["unempowered"]
+    assert [e["config"] for e in again] == [0, 1, 2]
+    assert again[0]["success"] and again[1] == plain["unempowered"][1]
+    assert sorted(pickle.loads(entry.read_bytes())) == [0, 1, 2]
+    # Another model is another entry, flown in full.
+    early = drone_run / "checkpoints" / "ppo_64_steps.zip"
+    proc = run("evaluate", "--model", str(early), "--episodes", "1", "--cache", str(cache),
+               "--out", str(tmp_path / "c"))  # fmt: skip
+    assert "from the cache" not in proc.stdout
+    assert len(list(cache.glob("*.pkl"))) == 2

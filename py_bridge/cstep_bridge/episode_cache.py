@@ -1,0 +1,70 @@
+"""Evaluated episodes kept on disk, so that an evaluation re-run with one more model (a new seed, a
+new agent) flies only that model, and an evaluation interrupted part-way resumes where it was.
+
+An entry holds one model's episodes on one evaluation set, by configuration index. Its key is a
+digest of everything an episode depends on: the model's weights, the observation statistics it
+is normalised with, the environment, the evaluation set's contents and the source of this package
+(simulation, envs, controller), the drone's URDF and the versions of the libraries that fly
+and act (PyBullet, PyTorch, stable-baselines3, NumPy); any change to one of them makes a new key, so a stale entry is
+never read. Entries are pickles: the cache is a directory of the user's own files, not a format
+to exchange.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import pickle
+from importlib.metadata import version
+from pathlib import Path
+
+from .metrics import Episode
+from .normalization import stats_path
+from .resources import drone_urdf
+
+PACKAGE_DIR = Path(__file__).resolve().parent
+LIBRARIES = ("pybullet", "torch", "stable-baselines3", "numpy")
+
+
+def entry_key(model: Path, env: str, eval_set: Path | None) -> str:
+    """The digest that names ``model``'s entry for ``env`` and ``eval_set`` (None: the env's
+    default set, itself part of the package's files when it is read from there)."""
+    h = hashlib.sha256()
+    for path in (model, stats_path(model), eval_set, drone_urdf()):
+        if path is not None and path.exists():
+            h.update(path.read_bytes())
+        h.update(b"\0")
+    h.update(env.encode())
+    h.update(" ".join(version(lib) for lib in LIBRARIES).encode())
+    for source in sorted(PACKAGE_DIR.rglob("*")):
+        if source.is_file() and source.suffix in (".py", ".json", ".yml", ".urdf"):
+            h.update(str(source.relative_to(PACKAGE_DIR)).encode())
+            h.update(source.read_bytes())
+    return h.hexdigest()[:32]
+
+
+class EpisodeCache:
+    """A directory of entries, one file per (model, env, evaluation set) key."""
+
+    def __init__(self, directory: Path) -> None:
+        self.directory = directory
+
+    def _path(self, key: str) -> Path:
+        return self.directory / f"{key}.pkl"
+
+    def load(self, key: str) -> dict[int, Episode]:
+        """The episodes stored under ``key`` by configuration index (empty if none)."""
+        path = self._path(key)
+        if not path.exists():
+            return {}
+        with path.open("rb") as f:
+            return pickle.load(f)
+
+    def store(self, key: str, episodes: dict[int, Episode]) -> None:
+        """Replaces ``key``'s entry with ``episodes``, atomically (a rename), so that an
+        interrupted write never leaves a truncated entry behind."""
+        self.directory.mkdir(parents=True, exist_ok=True)
+        path = self._path(key)
+        partial = path.with_suffix(".partial")
+        with partial.open("wb") as f:
+            pickle.dump(episodes, f)
+        partial.replace(path)

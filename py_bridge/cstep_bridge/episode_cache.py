@@ -3,17 +3,20 @@ new agent) flies only that model, and an evaluation interrupted part-way resumes
 
 An entry holds one model's episodes on one evaluation set, by configuration index. Its key is a
 digest of everything an episode depends on: the model's weights, the observation statistics it
-is normalised with, the environment, the evaluation set's contents and the source of this package
-(simulation, envs, controller), the drone's URDF and the versions of the libraries that fly
-and act (PyBullet, PyTorch, stable-baselines3, NumPy); any change to one of them makes a new key, so a stale entry is
-never read. Entries are pickles: the cache is a directory of the user's own files, not a format
+is normalised with, the environment, the evaluation set's contents, the source of every module of
+this package that the evaluation loads (simulation, envs, controller, metrics — not, say, the
+bag recorder), its data files, the drone's URDF and the versions of the libraries that fly and
+act (PyBullet, PyTorch, stable-baselines3, NumPy); any change to one of them makes a new key, so
+a stale entry is never read. Entries are pickles: the cache is a directory of the user's own files, not a format
 to exchange.
 """
 
 from __future__ import annotations
 
 import hashlib
+import importlib
 import pickle
+import sys
 from importlib.metadata import version
 from pathlib import Path
 
@@ -23,6 +26,21 @@ from .resources import drone_urdf
 
 PACKAGE_DIR = Path(__file__).resolve().parent
 LIBRARIES = ("pybullet", "torch", "stable-baselines3", "numpy")
+FLYING_MODULES = ("evaluate", "envs", "env", "maze", "sim", "world", "normalization", "metrics")
+"""What an evaluation worker runs; the key covers these and every package module they import."""
+
+
+def _evaluation_sources() -> list[Path]:
+    """The files of this package's modules an evaluation loads, and its data files."""
+    for name in FLYING_MODULES:
+        importlib.import_module(f"{__package__}.{name}")
+    files = {
+        Path(m.__file__).resolve()
+        for name, m in list(sys.modules.items())
+        if name.split(".")[0] == __package__ and getattr(m, "__file__", None)
+    }
+    files |= {p.resolve() for p in (PACKAGE_DIR / "data").rglob("*") if p.is_file()}
+    return sorted(files)
 
 
 def entry_key(model: Path, env: str, eval_set: Path | None) -> str:
@@ -35,10 +53,9 @@ def entry_key(model: Path, env: str, eval_set: Path | None) -> str:
         h.update(b"\0")
     h.update(env.encode())
     h.update(" ".join(version(lib) for lib in LIBRARIES).encode())
-    for source in sorted(PACKAGE_DIR.rglob("*")):
-        if source.is_file() and source.suffix in (".py", ".json", ".yml", ".urdf"):
-            h.update(str(source.relative_to(PACKAGE_DIR)).encode())
-            h.update(source.read_bytes())
+    for source in _evaluation_sources():
+        h.update(str(source.relative_to(PACKAGE_DIR)).encode())
+        h.update(source.read_bytes())
     return h.hexdigest()[:32]
 
 

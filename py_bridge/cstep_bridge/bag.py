@@ -7,12 +7,15 @@ PyPI wheel), with rclpy and the pure-Python ``rosbags`` package.
     python -m cstep_bridge.bag record run1                     # until Ctrl-C, kill or --duration S
     python -m cstep_bridge.bag replay run1 --record run1-replayed  # to a fresh node
     python -m cstep_bridge.bag compare run1 run1-replayed      # exit 0: the same scores
+    python -m cstep_bridge.bag record run2 --namespace /drone1   # a node run with __ns:=/drone1
 
 ``record`` subscribes to the inputs (``odom``, ``scan``, ``goal_pose``) and outputs
-(``cstep/empowerment``, ``cstep/reward``) of a node in the root namespace, and stores each
-message as it arrived (its CDR bytes, stamped with the time DDS received it), with the cstep_msgs
-definitions. ``replay`` publishes the recorded inputs, bytes and stamps unchanged, at the
-recorded pace (``--rate``), and records what the node answers. ``compare`` matches the scores
+(``cstep/empowerment``, ``cstep/reward``) of a node in ``--namespace`` (default the root), and
+stores each message as it arrived (its CDR bytes, stamped with the time DDS received it), with
+the cstep_msgs definitions. ``replay`` publishes the recorded inputs, bytes and stamps unchanged,
+at the recorded pace (``--rate``), to the namespace they were recorded in or to ``--namespace``
+(``/drone1/odom`` recorded, ``--namespace /drone2``: ``/drone2/odom``), and records what the
+node there answers. ``compare`` matches the scores
 of two bags by their stamp (the scan's) and reports any field that differs.
 
 The node scores a scan against the newest odometry it holds when it starts scoring that scan
@@ -190,9 +193,9 @@ class Recording:
         return ", ".join(f"{topic}: {n}" for topic, n in self.counts.items())
 
 
-def ros_node():
+def ros_node(namespace: str = "/"):
     """An rclpy context (without rclpy's signal handlers: Ctrl-C raises KeyboardInterrupt here)
-    and a node, on the environment's domain and discovery range."""
+    and a node in ``namespace``, on the environment's domain and discovery range."""
     import rclpy
     from rclpy.context import Context
     from rclpy.executors import SingleThreadedExecutor
@@ -201,17 +204,18 @@ def ros_node():
 
     context = Context()
     rclpy.init(context=context, signal_handler_options=SignalHandlerOptions.NO)
-    node = Node("cstep_bag", context=context)
+    node = Node("cstep_bag", namespace=namespace, context=context)
     executor = SingleThreadedExecutor(context=context)
     executor.add_node(node)
     return context, node, executor
 
 
-def record(path: Path, duration: float | None) -> int:
-    """``record``: the inputs and scores into ``path`` until Ctrl-C or ``duration`` seconds."""
+def record(path: Path, duration: float | None, namespace: str = "/") -> int:
+    """``record``: the inputs and scores of the node in ``namespace`` into ``path`` until Ctrl-C
+    or ``duration`` seconds."""
     new_bag(path)
     store = typestore()
-    context, node, executor = ros_node()
+    context, node, executor = ros_node(namespace)
     recording = None
     try:
         recording = Recording(node, path, INPUTS | OUTPUTS, store)
@@ -236,6 +240,20 @@ class Replay:
     messages: list[tuple[int, str, bytes]]
     types: dict[str, str]
 
+    def namespace(self) -> str:
+        """The namespace the inputs were recorded in: what each recorded topic adds before its
+        relative name (``/drone1/odom``: ``/drone1``); an error if they disagree."""
+        relative = {t: name for name, t in INPUTS.items()}
+        found = set()
+        for topic, msgtype in self.types.items():
+            suffix = "/" + relative[msgtype]
+            if not topic.endswith(suffix):
+                raise BagError(f"{topic} ({msgtype}) is not a {relative[msgtype]} topic")
+            found.add(topic[: -len(suffix)] or "/")
+        if len(found) != 1:
+            raise BagError(f"the inputs were recorded in several namespaces: {sorted(found)}")
+        return found.pop()
+
     @classmethod
     def read(cls, path: Path) -> Replay:
         with open_bag(path) as reader:
@@ -247,24 +265,26 @@ class Replay:
         )
 
 
-def replay(path: Path, out: Path | None, rate: float) -> int:
-    """``replay``: publish the recorded inputs of ``path`` (on their recorded topics) at
-    ``rate`` times the recorded pace, once every node subscribed to them has matched, then
-    SETTLE_S more (for the node to match our score readers: discovery is not symmetric in
-    time); record the scores into ``out`` if given."""
+def replay(path: Path, out: Path | None, rate: float, namespace: str | None = None) -> int:
+    """``replay``: publish the recorded inputs of ``path`` in ``namespace`` (default: the one
+    they were recorded in) at ``rate`` times the recorded pace, once every node subscribed to
+    them has matched, then SETTLE_S more (for the node to match our score readers: discovery is
+    not symmetric in time); record the scores into ``out`` if given."""
     from rclpy.qos import QoSProfile, ReliabilityPolicy, qos_profile_sensor_data
 
     inputs = Replay.read(path)
+    namespace = namespace or inputs.namespace()
+    relative = {t: name for name, t in INPUTS.items()}
     store = typestore()
     if out:
         new_bag(out)
-    context, node, executor = ros_node()
+    context, node, executor = ros_node(namespace)
     recording = Recording(node, out, OUTPUTS, store) if out else None
     sent = 0
     publishers = {
         topic: node.create_publisher(
             message_class(msgtype),
-            topic,
+            relative[msgtype],
             qos_profile_sensor_data
             if msgtype == INPUTS["scan"]
             else QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE),
@@ -272,14 +292,15 @@ def replay(path: Path, out: Path | None, rate: float) -> int:
         for topic, msgtype in inputs.types.items()
     }
     try:
-        print(f"waiting for subscribers to {', '.join(sorted(publishers))}", flush=True)
+        targets = sorted(p.topic_name for p in publishers.values())
+        print(f"waiting for subscribers to {', '.join(targets)}", flush=True)
         deadline = time.monotonic() + MATCH_TIMEOUT_S
         while not all(p.get_subscription_count() for p in publishers.values()) or (
             recording and not all(s.get_publisher_count() for s in recording.subscriptions)
         ):
             if time.monotonic() > deadline:
                 print(
-                    f"cstep_bridge.bag: no node subscribed to {', '.join(sorted(publishers))}"
+                    f"cstep_bridge.bag: no node subscribed to {', '.join(targets)}"
                     + (f" and publishing {', '.join(OUTPUTS)}" if recording else "")
                     + f" within {MATCH_TIMEOUT_S:.0f} s (same ROS_DOMAIN_ID?)",
                     file=sys.stderr,
@@ -371,6 +392,19 @@ def compare(first: Path, second: Path) -> int:
     return 0 if shared and not differ else 1
 
 
+def ros_namespace(text: str) -> str:
+    """``--namespace``: an absolute ROS namespace, as rclpy validates one."""
+    from rclpy.exceptions import InvalidNamespaceException
+    from rclpy.validate_namespace import validate_namespace
+
+    try:
+        validate_namespace(text)
+    except InvalidNamespaceException as err:
+        reason = str(err).splitlines()[0].rstrip(":")
+        raise argparse.ArgumentTypeError(f"{reason}: {text!r}") from err
+    return text
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(
         prog="python -m cstep_bridge.bag", description=__doc__.split("\n\n")[0]
@@ -379,10 +413,18 @@ def main(argv: list[str] | None = None) -> int:
     rec = commands.add_parser("record", help="record the node's inputs and scores")
     rec.add_argument("bag", type=Path, help="the bag directory to create")
     rec.add_argument("--duration", type=float, help="seconds (default: until Ctrl-C)")
+    rec.add_argument(
+        "--namespace", type=ros_namespace, default="/", help="the node's namespace (default: /)"
+    )
     play = commands.add_parser("replay", help="replay a bag's inputs to a node")
     play.add_argument("bag", type=Path, help="a bag made by record")
     play.add_argument("--record", type=Path, help="record the node's scores into this bag")
     play.add_argument("--rate", type=float, default=1.0, help="pace factor (default 1)")
+    play.add_argument(
+        "--namespace",
+        type=ros_namespace,
+        help="the node's namespace (default: the one the bag was recorded in)",
+    )
     cmp = commands.add_parser("compare", help="compare the scores of two bags")
     cmp.add_argument("first", type=Path)
     cmp.add_argument("second", type=Path)
@@ -391,9 +433,9 @@ def main(argv: list[str] | None = None) -> int:
         parser.error(f"--rate must be > 0, got {args.rate}")
     try:
         if args.command == "record":
-            return record(args.bag, args.duration)
+            return record(args.bag, args.duration, args.namespace)
         if args.command == "replay":
-            return replay(args.bag, args.record, args.rate)
+            return replay(args.bag, args.record, args.rate, args.namespace)
         return compare(args.first, args.second)
     except BagError as err:
         print(f"cstep_bridge.bag: {err}", file=sys.stderr)

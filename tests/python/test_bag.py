@@ -11,7 +11,17 @@ from pathlib import Path
 
 import pytest
 from conftest import DISCOVERY_TIMEOUT_S, REPO, other_test_domain, wait_until
-from cstep_bridge.bag import INPUTS, OUTPUTS, Recording, compare, main, scores, typestore
+from cstep_bridge.bag import (
+    INPUTS,
+    OUTPUTS,
+    BagError,
+    Recording,
+    Replay,
+    compare,
+    main,
+    scores,
+    typestore,
+)
 from node_rig import CONFIG, corridor_scan, cstep_binary, odometry, stop_gently
 
 # States that score differently (corridor width m, forward speed m/s): scan k is stamped 3000 + k.
@@ -106,24 +116,29 @@ def test_a_recorded_run_replayed_to_a_fresh_node_gets_the_same_scores(
     }
     assert len(distinct) == len(STATES), "the states scored alike: the comparison proves little"
 
-    # A fresh node on a domain of its own: only the replay talks to it.
+    # A fresh node on a domain of its own, in a namespace (another robot's): only the replay,
+    # moved into that namespace, talks to it.
     stop_gently(cstep_node)
     domain = other_test_domain(ros_domain)
     log = tmp_path / "fresh-node.log"
     with open(log, "w") as out:
         fresh = subprocess.Popen(
-            [str(cstep_binary()), "node", "--config", str(CONFIG)],
+            [str(cstep_binary()), "node", "--config", str(CONFIG), "--ros-args"]
+            + ["-r", "__ns:=/drone2"],
             stdout=out,
             stderr=subprocess.STDOUT,
             env=dict(os.environ, ROS_DOMAIN_ID=str(domain)),
             cwd=REPO,
         )
     try:
-        player = bag_command("replay", str(live), "--record", str(replayed), domain=domain)
+        player = bag_command(
+            "replay", str(live), "--record", str(replayed), "--namespace", "/drone2", domain=domain
+        )
         code, played = finish(player)
     finally:
         stop_gently(fresh)
     assert code == 0 and "replayed" in played, played + log.read_text()
+    assert "/drone2/odom, /drone2/scan" in played, played
 
     again = scores(replayed)
     for stamp in lockstep:
@@ -350,3 +365,40 @@ def test_replay_keeps_the_recorded_gaps_scaled_by_rate(ros_context, executor, tm
     received = [info["received_timestamp"] for _, info in arrivals]
     span = (received[-1] - received[0]) / 1e9
     assert 0.6 < span < 2.5, f"5 messages 1 s apart at rate 4 took {span:.2f} s"
+
+
+def test_record_follows_a_namespaced_node_and_replay_knows_where_a_bag_was_recorded(
+    ros_context, tmp_path
+):
+    from rclpy.node import Node
+
+    node = Node("cstep_bag_probe", namespace="/drone1", context=ros_context)
+    try:
+        recording = Recording(node, tmp_path / "ns", INPUTS | OUTPUTS, typestore())
+        names = sorted(sub.topic_name for sub in recording.subscriptions)
+        recording.close()
+    finally:
+        node.destroy_node()
+    assert names == [
+        "/drone1/cstep/empowerment",
+        "/drone1/cstep/reward",
+        "/drone1/goal_pose",
+        "/drone1/odom",
+        "/drone1/scan",
+    ]
+    recorded = Replay([], {f"/drone1/{name}": t for name, t in INPUTS.items()})
+    assert recorded.namespace() == "/drone1"
+    assert Replay([], {f"/{name}": t for name, t in INPUTS.items()}).namespace() == "/"
+    mixed = Replay([], {"/a/odom": INPUTS["odom"], "/b/scan": INPUTS["scan"]})
+    with pytest.raises(BagError, match="several namespaces"):
+        mixed.namespace()
+    with pytest.raises(BagError, match="/lidar .* is not a scan topic"):
+        Replay([], {"/lidar": INPUTS["scan"]}).namespace()
+
+
+def test_a_namespace_that_is_not_one_is_refused_with_one_line(tmp_path, capsys):
+    with pytest.raises(SystemExit) as exit_:
+        main(["record", str(tmp_path / "b"), "--namespace", "/dr one"])
+    assert exit_.value.code == 2
+    assert "--namespace: Invalid namespace" in capsys.readouterr().err
+    assert not (tmp_path / "b").exists()

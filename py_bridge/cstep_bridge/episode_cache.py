@@ -26,7 +26,7 @@ from .resources import drone_urdf
 
 PACKAGE_DIR = Path(__file__).resolve().parent
 LIBRARIES = ("pybullet", "torch", "stable-baselines3", "numpy")
-FLYING_MODULES = ("evaluate", "envs", "env", "maze", "sim", "world", "normalization", "metrics")
+FLYING_MODULES = ("flights", "envs", "env", "maze", "sim", "world", "normalization", "metrics")
 """What an evaluation worker runs; the key covers these and every package module they import."""
 
 

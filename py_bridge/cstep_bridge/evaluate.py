@@ -34,23 +34,19 @@ import argparse
 import json
 import shlex
 import sys
-from concurrent.futures import ProcessPoolExecutor
 from dataclasses import asdict, dataclass
-from multiprocessing import get_context
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
 from . import comparison, metrics, paper_results, training_log
-from .envs import ENV_NAMES, make_env
-from .episode_cache import EpisodeCache, entry_key
+from .envs import ENV_NAMES
+from .episode_cache import EpisodeCache
+from .flights import configurations, fly_model
 from .paper_results import PaperAgent
 from .plots import MapPanel, Path2D, paths_figure, threshold_figure, training_curves
 
 FINE_THRESHOLDS = tuple(np.round(np.arange(0.05, 0.501, 0.025), 3))
-CHUNK = 10
-"""Episodes a worker flies per task: the grain at which a cached evaluation resumes."""
 DRONE_PANELS = 6
 
 
@@ -118,115 +114,6 @@ def group_seeds(models: list[Agent]) -> dict[str, list[Agent]]:
                 f"{label}: two models trained with the same seed: pass --label for each --model"
             )
     return groups
-
-
-def configurations(env: str, eval_set: Path | None = None) -> list[Any]:
-    """The environment's evaluation set, in order: the drone's committed 100 arenas (or those of
-    ``eval_set``, a JSON file in the same format), the maze's 18 start × goal combinations."""
-    if env == "drone":
-        from .eval_set import DEFAULT_PATH, load
-
-        return load(eval_set or DEFAULT_PATH)
-    if eval_set is not None:
-        raise ValueError("--eval-set: only the drone takes an evaluation set from a file")
-    from .maze import configurations as maze_configurations
-
-    return maze_configurations()
-
-
-def reset_options(env: str, config: Any) -> dict[str, Any]:
-    """The ``reset`` options that pin one configuration."""
-    return {"arena": config} if env == "drone" else {"config": config}
-
-
-def fly_episodes(
-    model, env, env_name: str, configs: list[Any], ids: list[int], normalize_obs=None
-) -> list[metrics.Episode]:
-    """Flies each of ``configs`` (numbered ``ids``) in ``env`` with ``model``'s deterministic
-    policy; ``normalize_obs`` maps raw observations to the policy's input, if it needs that."""
-    radius = env.unwrapped.robot_radius
-    dt = env.unwrapped.control_period
-    route_taken = None
-    if env_name == "maze":
-        from .maze import route_taken
-    episodes = []
-    for i, config in zip(ids, configs, strict=True):
-        obs, info = env.reset(seed=i, options=reset_options(env_name, config))
-        xy, gap, done = [], [], False
-        while not done:
-            x = obs if normalize_obs is None else normalize_obs(obs)
-            action, _ = model.predict(x, deterministic=True)
-            obs, _, terminated, truncated, info = env.step(action)
-            xy.append(info["position"])
-            gap.append(info["min_obstacle_distance"] - radius)
-            done = terminated or truncated
-        episode = metrics.Episode(
-            dt=dt,
-            xy=np.array(xy),
-            gap=np.array(gap),
-            success=bool(info["success"] and not info["collision"]),
-            collision=bool(info["collision"]),
-            config=i,
-        )
-        if route_taken is not None:
-            episode.extra["route"] = route_taken(episode.xy)
-        episodes.append(episode)
-    return episodes
-
-
-def fly(
-    model_path: Path, env_name: str, indices: list[int], eval_set: Path | None = None
-) -> list[metrics.Episode]:
-    """Flies configurations ``indices`` with the deterministic policy (in a worker process)."""
-    import torch
-    from stable_baselines3 import PPO
-
-    from .normalization import observation_normalizer
-
-    torch.set_num_threads(1)
-    model = PPO.load(model_path, device="cpu")
-    configs = configurations(env_name, eval_set)
-    env = make_env(env_name, empowered=False)
-    try:
-        return fly_episodes(
-            model,
-            env,
-            env_name,
-            [configs[i] for i in indices],
-            indices,
-            observation_normalizer(model_path),
-        )
-    finally:
-        env.close()
-
-
-def evaluate_agent(
-    agent: Agent,
-    env: str,
-    indices: list[int],
-    jobs: int,
-    eval_set: Path | None = None,
-    cache: EpisodeCache | None = None,
-) -> list[metrics.Episode]:
-    """All of ``indices`` for one agent, over ``jobs`` worker processes; with a ``cache``, only
-    those it does not hold yet, each chunk of :data:`CHUNK` stored as soon as it is flown."""
-    key = entry_key(agent.model, env, eval_set) if cache else ""
-    done = cache.load(key) if cache else {}
-    missing = [i for i in indices if i not in done]
-    if cache and len(missing) < len(indices):
-        print(
-            f"  {len(indices) - len(missing)} of {len(indices)} episodes from the cache", flush=True
-        )
-    if missing:
-        chunks = [missing[i : i + CHUNK] for i in range(0, len(missing), CHUNK)]
-        k = min(jobs, len(chunks))
-        with ProcessPoolExecutor(k, mp_context=get_context("spawn")) as pool:
-            n = len(chunks)
-            for part in pool.map(fly, [agent.model] * n, [env] * n, chunks, [eval_set] * n):
-                done.update((e.config, e) for e in part)
-                if cache:
-                    cache.store(key, done)
-    return [done[i] for i in indices]
 
 
 def clear_x(env: str) -> float | None:
@@ -352,6 +239,29 @@ def markdown(
             for label, ci in intervals.items()
         ),
     ]
+    clear_line = clear_x(env)
+    if clear_line is not None:
+        lines += [
+            "",
+            "## The same, over the episodes that cleared the obstacle without a collision",
+            "",
+            (
+                "An agent that never leaves the start is never near the block: the means above reward"
+                " it. Over the episodes that got past the block without touching anything (n: how"
+                " many), the time near obstacles compares flights that did the same thing."
+            ),
+            "",
+            "| Distance threshold (m) | n | " + " | ".join(f"{d:g}" for d in th) + " |",
+            "|---|---:|" + "---|" * len(th),
+        ]
+        for label, seeds in runs.items():
+            flown = [e for run in seeds for e in run if not e.collision]
+            clean = [e for e in flown if e.clear_time(clear_line) is not None]
+            means = [
+                _fmt(float(np.mean([e.time_within(d) for e in clean])) if clean else None, ".2f")
+                for d in th
+            ]
+            lines.append(f"| {label} | {len(clean)} | " + " | ".join(means) + " |")
     base_label, base = next(iter(summaries.items()))
     if len(summaries) > 1:
         lines += [
@@ -493,7 +403,9 @@ def main(argv: list[str] | None = None) -> int:
         runs[label] = []
         for model in seeds:
             print(f"{label}: {len(indices)} episodes on {env} ({model.model})", flush=True)
-            runs[label].append(evaluate_agent(model, env, indices, args.jobs, args.eval_set, cache))
+            runs[label].append(
+                fly_model(model.model, env, indices, args.jobs, args.eval_set, cache)
+            )
             s = metrics.summarize(runs[label][-1], line)
             print(
                 f"  success {s.success_rate:.0%}, collisions {s.collision_rate:.0%}, "

@@ -78,7 +78,7 @@ def validation_set(env: str, size: int) -> list[Any]:
 def fly_validation(model, env, env_name: str, configs: list[Any], normalize_obs=None):
     """Success and collision rates and mean episode length (steps) of ``model``'s deterministic
     policy on ``configs`` in ``env``."""
-    from .evaluate import fly_episodes
+    from .flights import fly_episodes
 
     episodes = fly_episodes(model, env, env_name, configs, list(range(len(configs))), normalize_obs)
     return {

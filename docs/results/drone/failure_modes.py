@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 from cstep_bridge.env import CStepDroneEnv
-from cstep_bridge.evaluate import configurations, reset_options
+from cstep_bridge.flights import configurations, reset_options
 from cstep_bridge.noise_cap import state_noise
 from cstep_bridge.normalization import observation_normalizer
 from cstep_bridge.world import rect_distance

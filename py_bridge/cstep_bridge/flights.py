@@ -1,0 +1,134 @@
+"""Flying trained models over an evaluation set: the episodes :mod:`~cstep_bridge.evaluate`
+tables, the validation of :mod:`~cstep_bridge.selection` and the analysis scripts measure.
+
+Every configuration is flown with the deterministic policy from ``reset(seed=index)``, so an
+episode depends only on the model, its observation normaliser, the configuration and the code
+that flies it (this module, the envs, the simulation): what
+:mod:`~cstep_bridge.episode_cache` keys its entries on.
+"""
+
+from __future__ import annotations
+
+from concurrent.futures import ProcessPoolExecutor
+from multiprocessing import get_context
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from . import metrics
+from .envs import make_env
+from .episode_cache import EpisodeCache, entry_key
+
+CHUNK = 10
+"""Episodes a worker flies per task: the grain at which a cached evaluation resumes."""
+
+
+def configurations(env: str, eval_set: Path | None = None) -> list[Any]:
+    """The environment's evaluation set, in order: the drone's committed 100 arenas (or those of
+    ``eval_set``, a JSON file in the same format), the maze's 18 start × goal combinations."""
+    if env == "drone":
+        from .eval_set import DEFAULT_PATH, load
+
+        return load(eval_set or DEFAULT_PATH)
+    if eval_set is not None:
+        raise ValueError("--eval-set: only the drone takes an evaluation set from a file")
+    from .maze import configurations as maze_configurations
+
+    return maze_configurations()
+
+
+def reset_options(env: str, config: Any) -> dict[str, Any]:
+    """The ``reset`` options that pin one configuration."""
+    return {"arena": config} if env == "drone" else {"config": config}
+
+
+def fly_episodes(
+    model, env, env_name: str, configs: list[Any], ids: list[int], normalize_obs=None
+) -> list[metrics.Episode]:
+    """Flies each of ``configs`` (numbered ``ids``) in ``env`` with ``model``'s deterministic
+    policy; ``normalize_obs`` maps raw observations to the policy's input, if it needs that."""
+    radius = env.unwrapped.robot_radius
+    dt = env.unwrapped.control_period
+    route_taken = None
+    if env_name == "maze":
+        from .maze import route_taken
+    episodes = []
+    for i, config in zip(ids, configs, strict=True):
+        obs, info = env.reset(seed=i, options=reset_options(env_name, config))
+        xy, gap, done = [], [], False
+        while not done:
+            x = obs if normalize_obs is None else normalize_obs(obs)
+            action, _ = model.predict(x, deterministic=True)
+            obs, _, terminated, truncated, info = env.step(action)
+            xy.append(info["position"])
+            gap.append(info["min_obstacle_distance"] - radius)
+            done = terminated or truncated
+        episode = metrics.Episode(
+            dt=dt,
+            xy=np.array(xy),
+            gap=np.array(gap),
+            success=bool(info["success"] and not info["collision"]),
+            collision=bool(info["collision"]),
+            config=i,
+        )
+        if route_taken is not None:
+            episode.extra["route"] = route_taken(episode.xy)
+        episodes.append(episode)
+    return episodes
+
+
+def fly(
+    model_path: Path, env_name: str, indices: list[int], eval_set: Path | None = None
+) -> list[metrics.Episode]:
+    """Flies configurations ``indices`` with the deterministic policy (in a worker process)."""
+    import torch
+    from stable_baselines3 import PPO
+
+    from .normalization import observation_normalizer
+
+    torch.set_num_threads(1)
+    model = PPO.load(model_path, device="cpu")
+    configs = configurations(env_name, eval_set)
+    env = make_env(env_name, empowered=False)
+    try:
+        return fly_episodes(
+            model,
+            env,
+            env_name,
+            [configs[i] for i in indices],
+            indices,
+            observation_normalizer(model_path),
+        )
+    finally:
+        env.close()
+
+
+def fly_model(
+    model: Path,
+    env: str,
+    indices: list[int],
+    jobs: int,
+    eval_set: Path | None = None,
+    cache: EpisodeCache | None = None,
+) -> list[metrics.Episode]:
+    """Configurations ``indices`` flown by the model at ``model``, over ``jobs`` worker processes;
+    with a ``cache``, only those it does not hold yet, each chunk of :data:`CHUNK` stored as soon
+    as it is flown."""
+    key = entry_key(model, env, eval_set) if cache else ""
+    done = cache.load(key) if cache else {}
+    missing = [i for i in indices if i not in done]
+    if cache and len(missing) < len(indices):
+        print(
+            f"  {len(indices) - len(missing)} of {len(indices)} episodes from the cache", flush=True
+        )
+    if missing:
+        chunks = [missing[i : i + CHUNK] for i in range(0, len(missing), CHUNK)]
+        k = min(jobs, len(chunks))
+        with ProcessPoolExecutor(k, mp_context=get_context("spawn")) as pool:
+            n = len(chunks)
+            for part in pool.map(fly, [model] * n, [env] * n, chunks, [eval_set] * n):
+                done.update((e.config, e) for e in part)
+                if cache:
+                    cache.store(key, done)
+    return [done[i] for i in indices]

@@ -165,14 +165,16 @@ class Rig:
             self.scan.publish(corridor_scan(first_sec + k, width=width))
             self.spin_for(1.0 / rate_hz)
 
-    def feed_until(self, condition, what: str, first_sec: int, timeout: float = 20.0) -> int:
+    def feed_until(
+        self, condition, what: str, first_sec: int, timeout: float = 20.0, **odom
+    ) -> int:
         """Publish odometry and scans at 20 Hz until ``condition()``; returns the next stamp."""
         deadline = time.monotonic() + timeout
         sec = first_sec
         while not condition():
             if time.monotonic() > deadline:
                 pytest.fail(f"timed out after {timeout:.0f} s feeding the node until {what}")
-            self.feed(1, first_sec=sec)
+            self.feed(1, first_sec=sec, **odom)
             sec += 1
         return sec
 

@@ -1,7 +1,8 @@
 """Export a trained model as a small run directory to commit: ``run.json`` + ``model.zip`` with
 the policy's weights only (+ ``vecnormalize.pkl`` when the policy expects normalised inputs), and
-the run's history for curves across seeds: ``training.csv`` (every training episode) and
-``validation.csv`` (when the protocol validates).
+the run's history for curves across seeds: ``training.csv`` (every training episode),
+``learning.csv`` (every PPO update's critic fit and step size) and ``validation.csv`` (when the
+protocol validates).
 
     python -m cstep_bridge.export runs/drone-unempowered --which best \\
         --out docs/results/drone/models/unempowered-pilot
@@ -68,6 +69,9 @@ def export(run: Path, which: str, out: Path) -> Path:
     episodes = training_log.read_monitor(run / "monitor")
     if len(episodes):
         training_log.write_episodes(episodes, partial / training_log.TRAINING_CSV)
+    updates = training_log.read_tensorboard(run / "tb")
+    if len(updates):
+        training_log.write_learning(updates, partial / training_log.LEARNING_CSV)
     if (run / training_log.VALIDATION_CSV).exists():
         shutil.copyfile(run / training_log.VALIDATION_CSV, partial / training_log.VALIDATION_CSV)
     if out.exists():

@@ -1,6 +1,8 @@
-"""A run's training history as tables: every training episode (from SB3's Monitor files) and every
-validation (``validation.csv``), read for plots and kept beside an exported model as
-``training.csv``, so that curves across seeds can be drawn from committed models alone.
+"""A run's training history as tables: every training episode (from SB3's Monitor files), every
+validation (``validation.csv``) and every PPO update's learning signals (SB3's TensorBoard
+scalars), read for plots and kept beside an exported model as ``training.csv`` and
+``learning.csv``, so that curves across seeds and the critics' fit can be read from committed
+models alone (a run directory's ``monitor/`` and ``tb/`` are not committed).
 """
 
 from __future__ import annotations
@@ -20,6 +22,22 @@ TRAINING_CSV = "training.csv"
 
 VALIDATION_CSV = "validation.csv"
 """A run's validations (written by :mod:`~cstep_bridge.selection`)."""
+
+
+LEARNING_CSV = "learning.csv"
+"""An exported model's PPO updates: training steps and :data:`LEARNING_TAGS`."""
+
+LEARNING_TAGS = (
+    "explained_variance",
+    "value_loss",
+    "policy_gradient_loss",
+    "approx_kl",
+    "clip_fraction",
+    "entropy_loss",
+    "std",
+)
+"""SB3's ``train/`` scalars kept in ``learning.csv``: how well the critic predicts the returns
+(explained variance, value loss) and how far each update moves the policy."""
 
 
 def _flag(value: str | None) -> float:
@@ -79,3 +97,40 @@ def read_validation(path: Path) -> np.ndarray:
             for r in csv.DictReader(f)
         ]
     return np.array(rows).reshape(-1, 3)
+
+
+def read_tensorboard(tb_dir: Path) -> np.ndarray:
+    """Every PPO update's ``train/`` scalars of :data:`LEARNING_TAGS` in ``tb_dir`` (SB3's
+    TensorBoard logs, one folder per start of a resumed run), as rows of (steps, *tags) in step
+    order; a tag an update did not log is NaN. A step logged twice (a resumed run flies again
+    from its checkpoint) keeps its last value."""
+    from tensorboard.backend.event_processing.event_accumulator import EventAccumulator
+
+    by_step: dict[int, dict[str, float]] = {}
+    for events in sorted(Path(tb_dir).glob("*/events.out.tfevents.*")):
+        acc = EventAccumulator(str(events), size_guidance={"scalars": 0})
+        acc.Reload()
+        for tag in LEARNING_TAGS:
+            if f"train/{tag}" in acc.Tags()["scalars"]:
+                for event in acc.Scalars(f"train/{tag}"):
+                    by_step.setdefault(event.step, {})[tag] = event.value
+    rows = [
+        [step, *(v.get(t, np.nan) for t in LEARNING_TAGS)] for step, v in sorted(by_step.items())
+    ]
+    return np.array(rows, dtype=float).reshape(-1, 1 + len(LEARNING_TAGS))
+
+
+def write_learning(updates: np.ndarray, path: Path) -> None:
+    """Writes :func:`read_tensorboard`'s rows as ``learning.csv``."""
+    with path.open("w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(("steps", *LEARNING_TAGS))
+        for steps, *values in updates:
+            w.writerow([int(steps), *(f"{v:.6g}" for v in values)])
+
+
+def read_learning(path: Path) -> dict[str, np.ndarray]:
+    """The columns of a ``learning.csv`` by name (``steps`` and :data:`LEARNING_TAGS`)."""
+    with path.open() as f:
+        rows = list(csv.DictReader(f))
+    return {c: np.array([float(r[c]) for r in rows]) for c in ("steps", *LEARNING_TAGS)}

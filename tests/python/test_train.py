@@ -184,8 +184,12 @@ def test_evaluation_cli_groups_seeds_and_tests_agents_against_the_baseline(drone
 def test_an_exported_model_is_smaller_acts_the_same_and_evaluates(drone_run, tmp_path):
     out = tmp_path / "models" / "unempowered-s3"
     run("export", str(drone_run), "--which", "final", "--out", str(out))
-    # No statistics (not normalised), no validations (not validated), no episode ended (192 steps).
-    assert sorted(p.name for p in out.iterdir()) == ["model.zip", "run.json"]
+    # No statistics (not normalised), no validations (not validated), no episode ended (192
+    # steps); the PPO updates' learning signals, from the run's TensorBoard logs.
+    assert sorted(p.name for p in out.iterdir()) == ["learning.csv", "model.zip", "run.json"]
+    updates = training_log.read_learning(out / "learning.csv")
+    assert set(updates["steps"]) <= {64, 128, 192} and len(updates["steps"]) >= 1
+    assert np.all(np.isfinite(updates["value_loss"])) and np.all(updates["value_loss"] >= 0)
     assert (out / "model.zip").stat().st_size < (drone_run / "model.zip").stat().st_size / 2
     exported = json.loads((out / "run.json").read_text())
     assert exported["exported_from"]["steps"] == 192 and exported["env"] == "drone"
@@ -212,7 +216,8 @@ def test_an_export_keeps_the_runs_training_episodes_and_validations(tmp_path):
     )
     out = tmp_path / "export"
     run("export", str(src), "--which", "best", "--out", str(out))
-    names = ["model.zip", "run.json", "training.csv", "validation.csv", "vecnormalize.pkl"]
+    names = ["learning.csv", "model.zip", "run.json", "training.csv", "validation.csv"]
+    names.append("vecnormalize.pkl")
     assert sorted(p.name for p in out.iterdir()) == names
     kept = training_log.read_episodes(out / "training.csv")
     assert len(kept) >= 2  # 300-step maze episodes

@@ -1,78 +1,88 @@
-"""How well each comparison run's critic predicted its returns, from the runs' own logs: PPO's
-explained variance and value loss (SB3's TensorBoard scalars), the curriculum level reached and
-when, and the training episodes' success and collision rates over the last 100 k steps. An agent
-whose returns its critic cannot predict gets noisy advantages and learns slowly, whatever its
-reward asks for.
+"""How well each comparison run's critic predicted its returns, from the committed exports: PPO's
+explained variance and value loss (``learning.csv``, SB3's TensorBoard scalars), the curriculum
+level reached and when (the run's ``train.log``), and the training episodes' success and
+collision rates over the last 100 k steps (``training.csv``). An agent whose returns its critic
+cannot predict gets noisy advantages and learns slowly, whatever its reward asks for.
 
     PYTHONPATH=py_bridge .venv/bin/python docs/results/drone/learning_signals.py \\
-        --runs runs/cmp/drone runs/cmp/drone-none --out docs/results/drone
+        --models docs/results/drone/models docs/results/drone/models-none --out docs/results/drone
 
-Reads each run directory's ``tb/``, ``curriculum.json`` and ``monitor/`` (the trainer's; they are
-not committed: the campaign recreates them). Writes ``learning_signals.md``.
+Reads each export's ``run.json``, ``learning.csv`` and ``training.csv`` and the ``train.log`` of
+the run it was exported from (the campaign commits it). Exports made before ``learning.csv``
+existed show "–" for the critic's columns. Writes ``learning_signals.md``.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import re
 from pathlib import Path
 
 import numpy as np
 from cstep_bridge import training_log
-from tensorboard.backend.event_processing.event_accumulator import EventAccumulator
 
 LAST_STEPS = 100_000
+SEEDED = re.compile(r"-s\d+$")
+"""A comparison export's name, ``<agent>-s<seed>`` (the sweep's exports are not tabled)."""
+LEVEL = re.compile(r"curriculum: level (\d+) \(goal fraction ([\d.]+)\) at step (\d+)")
 
 
-def scalars(run: Path, tag: str) -> np.ndarray:
-    """The values of ``tag`` over training, from every event file of the run, in step order."""
-    found = []
-    for events in sorted((run / "tb").glob("*/events.out.tfevents.*")):
-        acc = EventAccumulator(str(events))
-        acc.Reload()
-        if tag in acc.Tags()["scalars"]:
-            found += [(e.step, e.value) for e in acc.Scalars(tag)]
-    return np.array([v for _, v in sorted(found)])
+def curriculum(export: Path) -> str:
+    """The last curriculum level the run reached and when, from its ``train.log``."""
+    run = Path(json.loads((export / "run.json").read_text())["exported_from"]["run"])
+    log = run / "train.log"
+    if not log.exists():
+        return "–"
+    reached = LEVEL.findall(log.read_text())
+    if not reached:
+        return "0 (start)"
+    level, fraction, step = reached[-1]
+    return f"{level} ({fraction}, {int(step) / 1000:.0f} k)"
 
 
-def row(run: Path) -> str | None:
-    """One table row for ``run``, or None if it has no logs yet."""
-    ev = scalars(run, "train/explained_variance")
-    loss = scalars(run, "train/value_loss")
-    if not len(ev):
+def row(export: Path) -> str | None:
+    """One table row for ``export``, or None if it holds no training history."""
+    if not (export / training_log.TRAINING_CSV).exists():
         return None
-    level = "–"
-    if (run / "curriculum.json").exists():
-        history = json.loads((run / "curriculum.json").read_text())["history"]
-        level = f"{history[-1][1]} ({history[-1][0] / 1000:.0f} k)"
-    steps, _, success, collision = training_log.read_monitor(run / "monitor").T
+    ev = loss = "–"
+    if (export / training_log.LEARNING_CSV).exists():
+        updates = training_log.read_learning(export / training_log.LEARNING_CSV)
+        half = len(updates["steps"]) // 2
+        ev = f"{np.nanmedian(updates['explained_variance'][half:]):.3f}"
+        loss = f"{np.nanmedian(updates['value_loss'][half:]):.4f}"
+    steps, _, success, collision = training_log.read_episodes(export / training_log.TRAINING_CSV).T
     last = steps > steps[-1] - LAST_STEPS
-    half = len(ev) // 2
     return (
-        f"| {run.parent.name}/{run.name} | {steps[-1] / 1000:.0f} k | {np.median(ev[half:]):.3f} | "
-        f"{np.median(loss[half:]):.4f} | {level} | {np.mean(success[last]):.0%} | "
-        f"{np.mean(collision[last]):.0%} |"
+        f"| {export.parent.name}/{export.name} | {steps[-1] / 1000:.0f} k | {ev} | {loss} | "
+        f"{curriculum(export)} | {np.mean(success[last]):.0%} | {np.mean(collision[last]):.0%} |"
     )
 
 
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--runs", type=Path, nargs="+", required=True, help="campaign run folders")
+    ap.add_argument("--models", type=Path, nargs="+", required=True, help="folders of exports")
     ap.add_argument("--out", type=Path, required=True)
     args = ap.parse_args()
-    rows = [r for folder in args.runs for run in sorted(folder.iterdir()) if (r := row(run))]
+    rows = [
+        r
+        for folder in args.models
+        for export in sorted(p for p in folder.iterdir() if SEEDED.search(p.name))
+        if (r := row(export))
+    ]
     lines = [
         "# The critics' view of each run",
         "",
         (
             "Command: `PYTHONPATH=py_bridge .venv/bin/python docs/results/drone/learning_signals.py"
-            f" --runs {' '.join(map(str, args.runs))} --out {args.out}`"
+            f" --models {' '.join(map(str, args.models))} --out {args.out}`"
         ),
         "",
         (
-            "Medians over the second half of each run's PPO updates; curriculum: the last level reached"
-            f" (0–4, goal fraction 0.2–1.0) and the step it was reached; training episodes of the last"
-            f" {LAST_STEPS // 1000} k steps (at the curriculum's level, not the full task)."
+            "Explained variance and value loss: medians over the second half of each run's PPO"
+            ' updates ("–": exported before `learning.csv` was kept). Curriculum: the last level'
+            " reached (0–4), its goal fraction and the step it was reached. Training episodes of the"
+            f" last {LAST_STEPS // 1000} k steps (at the curriculum's level, not the full task)."
         ),
         "",
         (

@@ -1,26 +1,36 @@
-//! The node's console log, through `tracing`, as rcutils prints it and as `--ros-args` sets it.
+//! The node's log, through `tracing`, as rcutils prints it, as rcl publishes it on `/rosout`,
+//! and as `--ros-args` sets both.
 //!
-//! Lines read `[INFO] [1733150000.123456789] [drone1.cstep_node]: message`, rcutils' default
-//! format, on stderr (stdout with `RCUTILS_LOGGING_USE_STDOUT=1`). The node's logger is named as
-//! rcl names a node's logger: the namespace with `.` for `/`, then the node name. Its level is
-//! the `--log-level logger:=LEVEL` rule for it or its nearest ancestor (`drone1` covers
-//! `drone1.cstep_node`), else `--log-level LEVEL`, else `info`, as rcutils resolves it.
-//! `--disable-stdout-logs` silences the console. What cstep does not do — file logging (the
-//! external library: `--log-file-name`, `--log-config-file`) and `/rosout` — is said once at
+//! Console lines read `[INFO] [1733150000.123456789] [drone1.cstep_node]: message`, rcutils'
+//! default format, on stderr (stdout with `RCUTILS_LOGGING_USE_STDOUT=1`). The node's logger is
+//! named as rcl names a node's logger: the namespace with `.` for `/`, then the node name. Its
+//! level is the `--log-level logger:=LEVEL` rule for it or its nearest ancestor (`drone1` covers
+//! `drone1.cstep_node`), else `--log-level LEVEL`, else `info`, as rcutils resolves it; it
+//! applies to the console and `/rosout` alike. `--disable-stdout-logs` silences the console,
+//! `--disable-rosout-logs` the topic (both on by default, as in rcl). `/rosout` carries every
+//! record (`rcl_interfaces/msg/Log`: wall-clock stamp, level, logger name, message, source file,
+//! module, line) with rcl's QoS for it; unlike rcl, the records logged before the node existed
+//! (start-up: parameter overrides, ignored arguments) are held and published when it does. What cstep does not do —
+//! file logging (the external library: `--log-file-name`, `--log-config-file`) — is said once at
 //! start-up rather than silently ignored.
 
-use std::fmt;
+use std::collections::VecDeque;
+use std::fmt::{self, Write as _};
+use std::sync::{Arc, Mutex};
 
+use ros2_client::builtin_interfaces::Time;
+use ros2_client::log::LogLevel as RosLevel;
+use ros2_client::{NodeLoggingHandle, RosoutRaw};
+use tracing::field::{Field, Visit};
 use tracing::{Event, Level, Subscriber};
 use tracing_subscriber::filter::{LevelFilter, Targets};
 use tracing_subscriber::fmt::format::Writer;
 use tracing_subscriber::fmt::writer::BoxMakeWriter;
 use tracing_subscriber::fmt::{FmtContext, FormatEvent, FormatFields};
-use tracing_subscriber::layer::SubscriberExt;
+use tracing_subscriber::layer::{Context, Layer, SubscriberExt};
 use tracing_subscriber::registry::LookupSpan;
 
 use super::args::{LogLevel, RosArgs};
-use super::messages::Time;
 
 /// rcl's logger name for node `node` in `namespace`: `drone1.cstep_node`, or `cstep_node` in the
 /// root namespace.
@@ -69,33 +79,110 @@ fn filter(level: LogLevel) -> LevelFilter {
     }
 }
 
-/// Starts the console log for the node's logger `logger` as `args` ask, then says which
-/// logging arguments cstep cannot honour. Errors if a log was already started in this process.
-pub fn init(args: &RosArgs, logger: &str) -> Result<(), String> {
-    if args.stdout_logs == Some(false) {
-        return Ok(());
+/// Where the log's `/rosout` records go: held from the start until [`Rosout::attach`] gives
+/// the node's handle, then published in order (so the start-up's records — parameter overrides,
+/// ignored arguments — reach `/rosout` too, with their own stamps), then each as it comes.
+#[derive(Clone)]
+pub struct Rosout {
+    logger: String,
+    sink: Arc<Mutex<Sink>>,
+}
+
+/// Records waiting for the node, or the node's handle.
+enum Sink {
+    Waiting(VecDeque<Record>),
+    Attached(NodeLoggingHandle),
+}
+
+/// One `rcl_interfaces/msg/Log` record, but the logger name.
+struct Record {
+    stamp: Time,
+    level: RosLevel,
+    message: String,
+    file: &'static str,
+    module: &'static str,
+    line: u32,
+}
+
+/// The most records held before the node exists: rcl's `/rosout` history depth.
+const HELD: usize = 1000;
+
+impl Rosout {
+    fn new(logger: &str) -> Self {
+        Rosout {
+            logger: logger.to_owned(),
+            sink: Arc::new(Mutex::new(Sink::Waiting(VecDeque::new()))),
+        }
     }
+
+    /// Publishes the held records through `handle` (a no-op when the node was created without
+    /// a `/rosout` publisher), then every later one. The first handle stays.
+    pub fn attach(&self, handle: NodeLoggingHandle) {
+        let mut sink = self.sink.lock().unwrap_or_else(|e| e.into_inner());
+        if let Sink::Waiting(held) = &mut *sink {
+            for record in held.drain(..) {
+                self.publish(&handle, record);
+            }
+            *sink = Sink::Attached(handle);
+        }
+    }
+
+    fn take(&self, record: Record) {
+        let mut sink = self.sink.lock().unwrap_or_else(|e| e.into_inner());
+        match &mut *sink {
+            Sink::Attached(handle) => self.publish(handle, record),
+            Sink::Waiting(held) => {
+                if held.len() == HELD {
+                    held.pop_front();
+                }
+                held.push_back(record);
+            }
+        }
+    }
+
+    fn publish(&self, handle: &NodeLoggingHandle, r: Record) {
+        handle.rosout_raw(
+            r.stamp,
+            r.level,
+            &self.logger,
+            &r.message,
+            r.file,
+            r.module,
+            r.line,
+        );
+    }
+}
+
+/// Starts the log for the node's logger `logger` as `args` ask — the console unless
+/// `--disable-stdout-logs`, `/rosout` (through the returned [`Rosout`], once attached) unless
+/// `--disable-rosout-logs` — then says which logging arguments cstep cannot honour. Errors if a
+/// log was already started in this process.
+pub fn init(args: &RosArgs, logger: &str) -> Result<Rosout, String> {
     let writer = if std::env::var("RCUTILS_LOGGING_USE_STDOUT").as_deref() == Ok("1") {
         BoxMakeWriter::new(std::io::stdout)
     } else {
         BoxMakeWriter::new(std::io::stderr)
     };
+    let console = (args.stdout_logs != Some(false)).then(|| {
+        tracing_subscriber::fmt::layer()
+            .event_format(RcutilsFormat {
+                logger: logger.to_owned(),
+            })
+            .with_writer(writer)
+    });
+    let rosout = Rosout::new(logger);
+    let topic = (args.rosout_logs != Some(false)).then(|| RosoutLayer(rosout.clone()));
     // Only cstep's own events: the libraries' `log` records (RustDDS, ros2-client) are not
-    // forwarded, as rcl leaves the middleware's own logging out of the node's console.
-    let subscriber = tracing_subscriber::fmt()
-        .event_format(RcutilsFormat {
-            logger: logger.to_owned(),
-        })
-        .with_writer(writer)
-        // The builder's own default ceiling is INFO; the level is the Targets filter's to set.
-        .with_max_level(LevelFilter::TRACE)
-        .finish()
+    // forwarded, as rcl leaves the middleware's own logging out of the node's log.
+    let subscriber = tracing_subscriber::registry()
+        .with(console)
+        .with(topic)
         .with(Targets::new().with_target("cstep", filter(level_of(args, logger))));
     tracing::subscriber::set_global_default(subscriber)
         .map_err(|e| format!("cannot start the log: {e}"))?;
     if let Some(file) = &args.log_config_file {
         tracing::warn!(
-            "--log-config-file {} ignored: cstep logs to the console only",
+            "--log-config-file {} ignored: cstep logs to the console and /rosout only",
             file.display()
         );
     }
@@ -105,10 +192,55 @@ pub fn init(args: &RosArgs, logger: &str) -> Result<(), String> {
     if args.external_lib_logs == Some(true) {
         tracing::warn!("--enable-external-lib-logs ignored: cstep writes no log file");
     }
-    if args.rosout_logs == Some(true) {
-        tracing::warn!("--enable-rosout-logs ignored: cstep does not publish /rosout");
+    Ok(rosout)
+}
+
+/// Publishes each record on `/rosout` as rcl does: wall-clock stamp, level, logger name,
+/// message (with the event's other fields as ` key=value`), source file, module and line.
+struct RosoutLayer(Rosout);
+
+impl<S: Subscriber> Layer<S> for RosoutLayer {
+    fn on_event(&self, event: &Event<'_>, _: Context<'_, S>) {
+        let mut text = MessageText::default();
+        event.record(&mut text);
+        let meta = event.metadata();
+        self.0.take(Record {
+            stamp: Time::now(),
+            level: match *meta.level() {
+                Level::ERROR => RosLevel::Error,
+                Level::WARN => RosLevel::Warn,
+                Level::INFO => RosLevel::Info,
+                Level::DEBUG | Level::TRACE => RosLevel::Debug,
+            },
+            message: text.0,
+            file: meta.file().unwrap_or_default(),
+            module: meta.module_path().unwrap_or_default(),
+            line: meta.line().unwrap_or_default(),
+        });
     }
-    Ok(())
+}
+
+/// An event's text: its `message`, then its other fields as ` key=value` (as the console
+/// shows them).
+#[derive(Default)]
+struct MessageText(String);
+
+impl Visit for MessageText {
+    fn record_debug(&mut self, field: &Field, value: &dyn fmt::Debug) {
+        if field.name() == "message" {
+            let _ = write!(self.0, "{value:?}");
+        } else {
+            let _ = write!(self.0, " {}={value:?}", field.name());
+        }
+    }
+
+    fn record_str(&mut self, field: &Field, value: &str) {
+        if field.name() == "message" {
+            self.0.push_str(value);
+        } else {
+            let _ = write!(self.0, " {}={value}", field.name());
+        }
+    }
 }
 
 /// rcutils' default console format: `[SEVERITY] [seconds.nanoseconds] [logger]: message`.
@@ -133,7 +265,7 @@ where
             Level::INFO => "INFO",
             Level::DEBUG | Level::TRACE => "DEBUG",
         };
-        let now = Time::wall_clock_now();
+        let now = super::messages::Time::wall_clock_now();
         write!(
             writer,
             "[{severity}] [{}.{:09}] [{}]: ",

@@ -57,7 +57,7 @@ use crate::reward::{empowered_reward, floor_reward, task_reward};
 pub fn run(config: &[PathBuf], ros_args: &RosArgs, stop: Arc<AtomicBool>) -> Result<(), String> {
     let node_name = ros_args.node_name(DEFAULT_NODE_NAME);
     let namespace = ros_args.namespace(&node_name);
-    logging::init(ros_args, &logging::logger_name(&namespace, &node_name))?;
+    let rosout = logging::init(ros_args, &logging::logger_name(&namespace, &node_name))?;
     refuse_security(ros_args)?;
     let fqn = format!("{}/{node_name}", namespace.trim_end_matches('/'));
     let (settings, interface, parameters) = load_parameters(config, ros_args, &fqn)?;
@@ -78,13 +78,15 @@ pub fn run(config: &[PathBuf], ros_args: &RosArgs, stop: Arc<AtomicBool>) -> Res
     ));
 
     let context = context_from_env(true)?;
-    let options = parameter_options(&shared, &parameters);
+    let options =
+        parameter_options(&shared, &parameters).enable_rosout(ros_args.rosout_logs != Some(false));
     let mut node = context
         .new_node(
             NodeName::new(&namespace, &node_name).map_err(|e| format!("node name: {e:?}"))?,
             options,
         )
         .map_err(|e| format!("cannot create the node: {e:?}"))?;
+    rosout.attach(node.logging_handle());
     let names = Names::resolve(&interface, ros_args, &node_name, &namespace)?;
     let ports = Ports::open(&mut node, &names)?;
     let guard = Guard {
@@ -458,9 +460,7 @@ fn failed<E: std::fmt::Debug>(what: &'static str) -> impl FnOnce(E) -> String {
 /// the topics), but `use_sim_time`, which ros2-client keeps itself ([`NodeClock`] reads it).
 fn parameter_options(shared: &Arc<Shared>, parameters: &Parameters) -> NodeOptions {
     let live = shared.clone();
-    let options = NodeOptions::new()
-        .enable_rosout(false)
-        .start_parameter_services(true);
+    let options = NodeOptions::new().start_parameter_services(true);
     super::parameters::declare(options, parameters, move |p, value| {
         if let ("safety_coefficient", Value::Double(c)) = (p.name, value) {
             *live

@@ -1,8 +1,9 @@
 """Issue 13, item 4: diagnostics and logs as ROS tools expect them. The diagnostics status is named
 `<fully qualified node name>: empowerment` (diagnostic_updater's convention), carries the robot's
 name as `hardware_id` and is stamped with the node's clock — `/clock` under `use_sim_time`. The
-console log is rcutils' format and honours `--log-level`, globally and per logger. Real nodes,
-real rclpy, real DDS, localhost only, a domain per test."""
+console log is rcutils' format and honours `--log-level`, globally and per logger; the same records
+go to `/rosout` as rcl publishes them. Real nodes, real rclpy, real DDS, localhost only, a domain
+per test."""
 
 import os
 import subprocess
@@ -14,9 +15,11 @@ from builtin_interfaces.msg import Time
 from conftest import REPO, wait_until
 from diagnostic_msgs.msg import DiagnosticArray
 from node_rig import CONFIG, RELIABLE, cstep_binary, stop_gently
+from rcl_interfaces.msg import Log
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.parameter_client import AsyncParameterClient
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock
 
 STARTED = "cstep node /"
@@ -78,6 +81,72 @@ def test_log_level_debug_adds_debug_lines_that_the_default_leaves_out(ros_domain
         stop_gently(proc)
     quiet = log_path.read_text()
     assert "[INFO]" not in quiet and "[DEBUG]" not in quiet, quiet
+
+
+ROSOUT = QoSProfile(
+    depth=1000, reliability=ReliabilityPolicy.RELIABLE, durability=DurabilityPolicy.TRANSIENT_LOCAL
+)
+"""rcl's /rosout profile (rcl/logging_rosout.h): a late subscriber gets the records kept."""
+
+
+def rosout_of(
+    proc, log_path, ros_context, executor, started: str = STARTED, settle: float = 3.0
+) -> list[Log]:
+    """The /rosout records of logger-named ``cstep`` nodes, read by a subscriber that joins once
+    the node has printed ``started`` (so only a kept history can give it what came before)."""
+    deadline = time.monotonic() + 30
+    while started not in log_path.read_text():
+        assert proc.poll() is None, log_path.read_text()
+        assert time.monotonic() < deadline, log_path.read_text()
+        time.sleep(0.1)
+    node = Node("cstep_rosout_probe", context=ros_context)
+    executor.add_node(node)
+    received: list[Log] = []
+    node.create_subscription(Log, "/rosout", received.append, ROSOUT)
+    try:
+        end = time.monotonic() + settle
+        while time.monotonic() < end:
+            executor.spin_once(timeout_sec=0.05)
+    finally:
+        node.destroy_node()
+    return [r for r in received if "cstep_node" in r.name]
+
+
+def test_rosout_carries_the_nodes_records_at_its_log_level(ros_domain, ros_context, executor):
+    proc, log_path = start(ros_domain, "-r", "__ns:=/drone1", "--log-level", "debug", tag="rosout")
+    try:
+        records = rosout_of(proc, log_path, ros_context, executor)
+    finally:
+        stop_gently(proc)
+    started = [r for r in records if r.msg.startswith("cstep node /drone1/cstep_node on")]
+    assert len(started) == 1, [r.msg for r in records]
+    [line] = started
+    assert line.name == "drone1.cstep_node" and line.level == Log.INFO
+    assert line.file.endswith(".rs") and line.line > 0 and line.function.startswith("cstep")
+    assert abs(line.stamp.sec - time.time()) < 60  # the wall clock, as rcl stamps records
+    # The records logged before the node existed (the parameter overrides, at debug) were held
+    # and published when it did: a subscriber joining later still gets them.
+    overrides = [r for r in records if r.msg.startswith("parameter override horizon = ")]
+    assert len(overrides) == 1 and overrides[0].level == Log.DEBUG, [r.msg for r in records]
+    assert overrides[0].stamp.sec <= line.stamp.sec
+
+    # The level applies to /rosout as to the console; --disable-rosout-logs silences it.
+    ignored = "--log-file-name x ignored"
+    proc, log_path = start(
+        ros_domain, "--log-level", "warn", "--log-file-name", "x", tag="rosout-warn"
+    )
+    try:
+        warn_only = rosout_of(proc, log_path, ros_context, executor, started=ignored)
+    finally:
+        stop_gently(proc)
+    assert any(r.msg.startswith(ignored) and r.level == Log.WARN for r in warn_only), warn_only
+    assert all(r.level >= Log.WARN for r in warn_only), [(r.level, r.msg) for r in warn_only]
+    proc, log_path = start(ros_domain, "--disable-rosout-logs", tag="rosout-off")
+    try:
+        assert rosout_of(proc, log_path, ros_context, executor) == []
+    finally:
+        stop_gently(proc)
+    assert STARTED in log_path.read_text()  # the console still has it
 
 
 def diagnostics_of(proc, ros_context, executor, clock_sec: int | None = None) -> DiagnosticArray:

@@ -13,6 +13,7 @@ use serde_norway::Value;
 
 use crate::model::CommandAxes;
 use crate::occupancy::UnknownSpace;
+use crate::param_overrides::ParamOverrides;
 pub use crate::parameters::BUILTIN_URDF_PATH;
 use crate::parameters::{self, Value as Typed, PARAMETERS};
 use crate::sampling::{Controls, SamplerKind, CONTROL_SAMPLE_BUDGET_BYTES};
@@ -61,12 +62,28 @@ impl ParameterSet {
         }
     }
 
-    /// Overlays the parameters file `path`'s section for node `node_name`.
+    /// Overlays the sections of the parameters file `path` that apply to node `node_name` (a
+    /// bare name is the root namespace's), matched by rcl's rules ([`crate::param_overrides`]:
+    /// `/ns/node`, `/**`, `/**/node`, nested namespace keys); a file with none for it is an
+    /// error here, where one file configures one evaluation.
     pub fn merge_file(&mut self, path: &Path, node_name: &str) -> Result<(), ConfigError> {
         let source = path.display().to_string();
-        let text = crate::input_file::read_to_string(path)
-            .map_err(|e| ConfigError::new(&source, format!("cannot read the file: {e}")))?;
-        self.merge_yaml(&text, &source, path.parent(), node_name)
+        let mut table = ParamOverrides::default();
+        table
+            .read_file(path)
+            .map_err(|e| ConfigError::new(&source, e))?;
+        let fqn = format!("/{}", node_name.trim_start_matches('/'));
+        if !table.unmatched_files(&fqn).is_empty() {
+            let bare = node_name.trim_start_matches('/');
+            return Err(ConfigError::new(
+                &source,
+                format!("no parameters for node '{bare}' (expected a '{bare}:' or '/**:' section)"),
+            ));
+        }
+        for o in table.for_node(&fqn) {
+            self.insert(&o.name, o.value, &o.source, o.base_dir.as_deref());
+        }
+        Ok(())
     }
 
     /// Overlays one `name:=value` assignment from the command line (the value is read as YAML).
@@ -88,7 +105,7 @@ impl ParameterSet {
 
     /// Sets `name` to `value`, read from `source` (a file, whose directory `base_dir` relative
     /// paths are relative to, or the command line): for overrides gathered elsewhere, such as
-    /// the node's `--ros-args` ([`crate::ros::param_overrides`]).
+    /// the node's `--ros-args` ([`crate::param_overrides`]).
     pub fn insert(&mut self, name: &str, value: Value, source: &str, base_dir: Option<&Path>) {
         let value = if name == "robot_description" {
             resolve_path(value, base_dir)
@@ -97,63 +114,6 @@ impl ParameterSet {
         };
         self.values
             .insert(name.to_owned(), (value, source.to_owned()));
-    }
-
-    /// Reads a `ros__parameters` file's section for `node_name` (or the `/**` wildcard) into the
-    /// set; nested maps become dotted names as in ROS 2.
-    fn merge_yaml(
-        &mut self,
-        text: &str,
-        source: &str,
-        base_dir: Option<&Path>,
-        node_name: &str,
-    ) -> Result<(), ConfigError> {
-        let document: Value = serde_norway::from_str(text)
-            .map_err(|e| ConfigError::new(source, format!("not valid YAML: {e}")))?;
-        let Value::Mapping(nodes) = document else {
-            return Err(ConfigError::new(
-                source,
-                "expected a mapping of node names to `ros__parameters`",
-            ));
-        };
-        let bare = node_name.trim_start_matches('/');
-        let mut found = false;
-        for (key, section) in &nodes {
-            let key = key.as_str().unwrap_or_default();
-            let matches = key == "/**" || key.trim_start_matches('/') == bare;
-            if !matches {
-                continue;
-            }
-            let parameters = section.get("ros__parameters").ok_or_else(|| {
-                ConfigError::new(
-                    source,
-                    format!("node '{key}' has no `ros__parameters` section"),
-                )
-            })?;
-            let Value::Mapping(parameters) = parameters else {
-                return Err(ConfigError::new(
-                    source,
-                    format!("`{key}.ros__parameters` must be a mapping"),
-                ));
-            };
-            found = true;
-            let mut flat = Vec::new();
-            flatten("", parameters, &mut flat);
-            for (name, mut value) in flat {
-                if name == "robot_description" {
-                    value = resolve_path(value, base_dir);
-                }
-                self.values.insert(name, (value, source.to_owned()));
-            }
-        }
-        if found {
-            Ok(())
-        } else {
-            Err(ConfigError::new(
-                source,
-                format!("no parameters for node '{bare}' (expected a '{bare}:' or '/**:' section)"),
-            ))
-        }
     }
 
     /// Checks every parameter against its definition, defaults filling what no file or
@@ -514,7 +474,7 @@ pub fn load_all(
 
 /// Checks a complete parameter set (the built-in defaults with files and overrides applied,
 /// however they were gathered: [`load_all`] here, the node's `--ros-args` in
-/// [`crate::ros::param_overrides`]) against [`PARAMETERS`], rejects unknown names, and reads the
+/// [`crate::param_overrides`]) against [`PARAMETERS`], rejects unknown names, and reads the
 /// evaluation's and the node's settings. The checked values come back too: the node declares
 /// them.
 pub fn validate(set: ParameterSet) -> Result<(Settings, NodeSettings, Parameters), ConfigError> {
@@ -577,6 +537,30 @@ mod tests {
         assert_eq!(s.horizon, 0.5);
         assert_eq!(s.trajectories, 2000);
         assert_eq!(s.model, ModelKind::PointMass);
+    }
+
+    #[test]
+    fn a_parameters_file_means_what_it_means_to_the_node() {
+        // `cstep eval --config` read only `name:` and `/**:` sections; the node reads rcl's
+        // whole table (fully qualified and nested keys, `*` and `**`): one file, one meaning.
+        let dir = temp_dir("rcl");
+        let load = |name: &str, text: &str| {
+            Settings::load(Some(&write(&dir, name, text)), DEFAULT_NODE_NAME, &[])
+        };
+        let nested = "/**/cstep_node:\n  ros__parameters:\n    horizon: 0.5\n\
+                      /cstep_node:\n  ros__parameters:\n    trajectories: 300\n";
+        let s = load("nested.yaml", nested).unwrap();
+        assert_eq!((s.horizon, s.trajectories), (0.5, 300));
+        let s = load("star.yaml", "/*:\n  ros__parameters:\n    horizon: 0.7\n").unwrap();
+        assert_eq!(s.horizon, 0.7);
+        // A section for the node in a namespace is not the root namespace's node's.
+        let other = "drone1:\n  cstep_node:\n    ros__parameters:\n      horizon: 0.5\n";
+        let err = load("ns.yaml", other).unwrap_err();
+        assert!(
+            err.to_string()
+                .contains("no parameters for node 'cstep_node'"),
+            "{err}"
+        );
     }
 
     #[test]

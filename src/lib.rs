@@ -27,6 +27,7 @@ pub mod estimator;
 pub mod input_file;
 pub mod model;
 pub mod occupancy;
+pub mod param_overrides;
 pub mod parameters;
 pub mod plot;
 pub mod reward;

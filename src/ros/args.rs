@@ -14,13 +14,13 @@
 
 use std::path::PathBuf;
 
-use super::param_overrides::ParamSource;
+use crate::param_overrides::ParamSource;
 
 /// What `--ros-args … [--]` asked for.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct RosArgs {
     /// `--params-file FILE` and `-p [node:]name:=value`, in command-line order (the order rcl
-    /// merges them in, [`super::param_overrides`]).
+    /// merges them in, [`crate::param_overrides`]).
     pub params: Vec<ParamSource>,
     /// `-r [node:]from:=to` rules, `__node` and `__ns` included, in order.
     pub remaps: Vec<RemapRule>,

@@ -13,7 +13,6 @@ pub mod logging;
 pub mod markers;
 pub mod messages;
 pub mod node;
-pub mod param_overrides;
 pub mod parameters;
 pub mod rivals;
 pub mod stamps;

@@ -42,11 +42,11 @@ use super::messages::{
     EvaluateBatchResponse, EvaluateRequest, EvaluateResponse, Header, KeyValue, LaserScan,
     MarkerArray, Odometry, Point, PoseStamped, Time,
 };
-use super::param_overrides::{ParamOverrides, ParamSource};
 use super::rivals::{self, Claims, Verdict};
 use super::stamps::{Order, StampOrder};
 use crate::config::{validate, NodeSettings, ParameterSet, Parameters, DEFAULT_NODE_NAME};
 use crate::estimator::{robot_description, Estimator, EMPOWERMENT_FLOOR};
+use crate::param_overrides::{ParamOverrides, ParamSource};
 use crate::parameters::Value;
 use crate::reward::{empowered_reward, floor_reward, task_reward};
 
@@ -159,7 +159,7 @@ fn refuse_security(ros_args: &RosArgs) -> Result<(), String> {
 }
 
 /// The node's parameters: the built-in defaults, then the `--config` files and `--ros-args`
-/// overrides that apply to node `fqn` ([`super::param_overrides`]), validated.
+/// overrides that apply to node `fqn` ([`crate::param_overrides`]), validated.
 fn load_parameters(
     config: &[PathBuf],
     ros_args: &RosArgs,

@@ -13,7 +13,8 @@
 //! `/cstep_node` (the root namespace), and a `-p x:=1` lands in the `/**` section, which loses to
 //! a `/ns/node` section that came after `/**` first appeared — rcl's order, kept on purpose so
 //! that a params file means the same to cstep as to an rclcpp or rclpy node (checked against
-//! rclpy in `tests/python/test_ros_args.py`).
+//! rclpy in `tests/python/test_ros_args.py`). The node's `--ros-args` and `cstep eval --config`
+//! read parameters files through this one table, so a file means the same to both.
 
 use std::path::{Path, PathBuf};
 
@@ -65,14 +66,9 @@ impl ParamOverrides {
         let mut table = Self::default();
         for source in sources {
             match source {
-                ParamSource::File(path) => {
-                    let text = crate::input_file::read_to_string(path)
-                        .map_err(|e| format!("{}: cannot read the file: {e}", path.display()))?;
-                    let keys = table
-                        .add_file(&text, path)
-                        .map_err(|e| format!("{}: {e}", path.display()))?;
-                    table.files.push((path.clone(), keys));
-                }
+                ParamSource::File(path) => table
+                    .read_file(path)
+                    .map_err(|e| format!("{}: {e}", path.display()))?,
                 ParamSource::Assignment { node, name, value } => {
                     let parsed: Value = serde_norway::from_str(value).map_err(|e| {
                         format!("command line: cannot read the value of '{name}': {e}")
@@ -90,6 +86,16 @@ impl ParamOverrides {
             }
         }
         Ok(table)
+    }
+
+    /// Adds the sections of the parameters file at `path`; an unreadable or malformed file is
+    /// an error (not naming it: the caller does).
+    pub fn read_file(&mut self, path: &Path) -> Result<(), String> {
+        let text = crate::input_file::read_to_string(path)
+            .map_err(|e| format!("cannot read the file: {e}"))?;
+        let keys = self.add_file(&text, path)?;
+        self.files.push((path.to_path_buf(), keys));
+        Ok(())
     }
 
     /// Adds a parameters file's sections (`path` names it and gives relative paths their base);

@@ -4,17 +4,16 @@
 use std::sync::Arc;
 use std::time::Duration;
 
+use ros2_client::dds::rustdds::Topic;
 use ros2_client::qos::{Durability, History, WhenFull};
-use ros2_client::{
-    MessageTypeName, Name, Node, Publisher, QosProfile, Server, ServiceMapping, ServiceTypeName,
-};
+use ros2_client::{Name, Node, Publisher, QosProfile, Server, ServiceMapping, ServiceTypeName};
 
 use crate::config::NodeSettings;
 use crate::ros::args::{NameKind, RosArgs};
 use crate::ros::messages::{
-    Clock, DiagnosticArray, EmpoweredReward, Empowerment, EvaluateBatchRequest,
-    EvaluateBatchResponse, EvaluateRequest, EvaluateResponse, LaserScan, MarkerArray, Odometry,
-    PoseStamped,
+    Clock, DiagnosticArray, EmpoweredReward, Empowerment, Evaluate, EvaluateBatch,
+    EvaluateBatchRequest, EvaluateBatchResponse, EvaluateRequest, EvaluateResponse, LaserScan,
+    MarkerArray, Odometry, PoseStamped, RosMessage, RosService,
 };
 
 /// The node's topic and service names, fully qualified after namespace and remapping.
@@ -82,36 +81,16 @@ impl Ports {
             .reliability_best_effort()
             .durability(Durability::Volatile)
             .history(History::KeepLast { depth: 5 });
-        let topic = |name: &str, package: &str, kind: &str, qos: &QosProfile| {
-            let parsed = Name::parse(name).map_err(|e| format!("topic name \"{name}\": {e:?}"))?;
-            node.create_topic(&parsed, MessageTypeName::new(package, kind), qos)
-                .map_err(|e| format!("topic {name}: {e:?}"))
-        };
-        let odom_topic = topic(&names.odom, "nav_msgs", "Odometry", &sensor)?;
-        let scan_topic = topic(&names.scan, "sensor_msgs", "LaserScan", &sensor)?;
-        let goal_topic = topic(&names.goal, "geometry_msgs", "PoseStamped", &reliable)?;
-        let clock_topic = topic(&names.clock, "rosgraph_msgs", "Clock", &sensor)?;
-        let empowerment_topic = topic(&names.empowerment, "cstep_msgs", "Empowerment", &reliable)?;
-        let reward_topic = topic(&names.reward, "cstep_msgs", "EmpoweredReward", &reliable)?;
-        let markers_topic = topic(
-            &names.markers,
-            "visualization_msgs",
-            "MarkerArray",
-            &reliable,
-        )?;
-        let diagnostics_topic = topic(
-            &names.diagnostics,
-            "diagnostic_msgs",
-            "DiagnosticArray",
-            &reliable,
-        )?;
-        let service = |name: &str, kind: &str| {
-            let parsed =
-                Name::parse(name).map_err(|e| format!("service name \"{name}\": {e:?}"))?;
-            Ok::<_, String>((parsed, ServiceTypeName::new("cstep_msgs", kind)))
-        };
-        let (evaluate_name, evaluate_type) = service(&names.evaluate, "Evaluate")?;
-        let (batch_name, batch_type) = service(&names.evaluate_batch, "EvaluateBatch")?;
+        let odom_topic = topic::<Odometry>(node, &names.odom, &sensor)?;
+        let scan_topic = topic::<LaserScan>(node, &names.scan, &sensor)?;
+        let goal_topic = topic::<PoseStamped>(node, &names.goal, &reliable)?;
+        let clock_topic = topic::<Clock>(node, &names.clock, &sensor)?;
+        let empowerment_topic = topic::<Empowerment>(node, &names.empowerment, &reliable)?;
+        let reward_topic = topic::<EmpoweredReward>(node, &names.reward, &reliable)?;
+        let markers_topic = topic::<MarkerArray>(node, &names.markers, &reliable)?;
+        let diagnostics_topic = topic::<DiagnosticArray>(node, &names.diagnostics, &reliable)?;
+        let (evaluate_name, evaluate_type) = service::<Evaluate>(&names.evaluate)?;
+        let (batch_name, batch_type) = service::<EvaluateBatch>(&names.evaluate_batch)?;
         Ok(Self {
             odom: node
                 .create_subscription(&odom_topic, Some(sensor.clone()))
@@ -160,6 +139,19 @@ impl Ports {
                 .map_err(failed("the evaluate_batch service"))?,
         })
     }
+}
+
+/// The topic `name` of message type `M` (its ROS type name from [`RosMessage`]), with `qos`.
+fn topic<M: RosMessage>(node: &Node, name: &str, qos: &QosProfile) -> Result<Topic, String> {
+    let parsed = Name::parse(name).map_err(|e| format!("topic name \"{name}\": {e:?}"))?;
+    node.create_topic(&parsed, M::type_name(), qos)
+        .map_err(|e| format!("topic {name}: {e:?}"))
+}
+
+/// The parsed name `name` of service `S` and its ROS type name (from [`RosService`]).
+fn service<S: RosService>(name: &str) -> Result<(Name, ServiceTypeName), String> {
+    let parsed = Name::parse(name).map_err(|e| format!("service name \"{name}\": {e:?}"))?;
+    Ok((parsed, S::type_name()))
 }
 
 /// An error mapper for creating the named entity.

@@ -13,9 +13,11 @@ mod live;
 
 use std::time::Duration;
 
-use cstep::ros::messages::{EvaluateBatchRequest, EvaluateBatchResponse, Odometry};
+use cstep::ros::messages::{
+    EvaluateBatch, EvaluateBatchRequest, EvaluateBatchResponse, Odometry, RosService,
+};
 use live::{peer, reliable_qos, start_node, walls_scan, PATIENCE};
-use ros2_client::{Name, ServiceMapping, ServiceTypeName};
+use ros2_client::{Name, ServiceMapping};
 
 /// States in the large batch: a reply over the ~64 kB loopback budget.
 const BIG: usize = 512;
@@ -45,7 +47,7 @@ fn a_batch_reply_sent_as_fragments_arrives_whole() {
         .create_client::<EvaluateBatchRequest, EvaluateBatchResponse>(
             ServiceMapping::Enhanced,
             &Name::parse("/cstep/evaluate_batch").unwrap(),
-            &ServiceTypeName::new("cstep_msgs", "EvaluateBatch"),
+            &EvaluateBatch::type_name(),
             qos.clone(),
             qos,
         )

@@ -7,10 +7,12 @@ mod live;
 
 use std::time::Duration;
 
-use cstep::ros::messages::{DiagnosticArray, LaserScan, Odometry};
+use cstep::ros::messages::{
+    DiagnosticArray, Evaluate, LaserScan, Odometry, RosMessage, RosService,
+};
 use futures::StreamExt;
 use live::{peer, reliable_qos, start_node, walls_scan, PATIENCE};
-use ros2_client::{Message, MessageTypeName, Name, ServiceMapping, ServiceTypeName};
+use ros2_client::{Message, MessageTypeName, Name, ServiceMapping};
 use serde::{Deserialize, Serialize};
 
 /// What the test sends as a `cstep_msgs/Evaluate` request: one byte, where the odometry's
@@ -29,7 +31,7 @@ fn an_undecodable_evaluate_request_is_counted_and_named_in_diagnostics() {
         .create_client::<OneByte, OneByte>(
             ServiceMapping::Enhanced,
             &Name::parse("/cstep/evaluate").unwrap(),
-            &ServiceTypeName::new("cstep_msgs", "Evaluate"),
+            &Evaluate::type_name(),
             qos.clone(),
             qos.clone(),
         )
@@ -37,7 +39,7 @@ fn an_undecodable_evaluate_request_is_counted_and_named_in_diagnostics() {
     let topic = peer
         .create_topic(
             &Name::parse("/diagnostics").unwrap(),
-            MessageTypeName::new("diagnostic_msgs", "DiagnosticArray"),
+            DiagnosticArray::type_name(),
             &qos,
         )
         .unwrap();
@@ -45,13 +47,12 @@ fn an_undecodable_evaluate_request_is_counted_and_named_in_diagnostics() {
         .create_subscription::<DiagnosticArray>(&topic, None)
         .unwrap();
     // Diagnostics name the last problem only while the inputs are fresh: feed valid ones.
-    let publisher = |name: &str, package: &str, kind: &str| {
+    let publisher = |name: &str, type_name: MessageTypeName| {
         let topic = Name::parse(name).unwrap();
-        peer.create_topic(&topic, MessageTypeName::new(package, kind), &qos)
-            .unwrap()
+        peer.create_topic(&topic, type_name, &qos).unwrap()
     };
-    let odom_topic = publisher("/odom", "nav_msgs", "Odometry");
-    let scan_topic = publisher("/scan", "sensor_msgs", "LaserScan");
+    let odom_topic = publisher("/odom", Odometry::type_name());
+    let scan_topic = publisher("/scan", LaserScan::type_name());
     let odom = peer
         .create_publisher::<Odometry>(&odom_topic, None)
         .unwrap();

@@ -16,7 +16,7 @@ use cstep::ros::args::RosArgs;
 use cstep::ros::context::context_from_env;
 use cstep::ros::convert::scan_to_laser_scan;
 use cstep::ros::messages::{
-    EmpoweredReward, Empowerment, Header, LaserScan, Odometry, PoseStamped, Time,
+    EmpoweredReward, Empowerment, Header, LaserScan, Odometry, PoseStamped, RosMessage, Time,
 };
 use cstep::scene::Lidar;
 
@@ -102,19 +102,19 @@ fn fly(args: &DemoArgs, stop: &std::sync::atomic::AtomicBool) -> Result<Vec<Scor
         .reliability_reliable(WhenFull::Wait(Duration::from_millis(10)))
         .durability(Durability::Volatile)
         .history(History::KeepLast { depth: 50 });
-    let topic = |name: &str, package: &str, kind: &str| {
+    let topic = |name: &str, type_name: MessageTypeName| {
         node.create_topic(
             &Name::parse(name).map_err(|e| format!("{e:?}"))?,
-            MessageTypeName::new(package, kind),
+            type_name,
             &reliable,
         )
         .map_err(|e| format!("topic {name}: {e:?}"))
     };
-    let odom_topic = topic("/odom", "nav_msgs", "Odometry")?;
-    let scan_topic = topic("/scan", "sensor_msgs", "LaserScan")?;
-    let empowerment_topic = topic("/cstep/empowerment", "cstep_msgs", "Empowerment")?;
-    let reward_topic = topic("/cstep/reward", "cstep_msgs", "EmpoweredReward")?;
-    let goal_topic = topic("/goal_pose", "geometry_msgs", "PoseStamped")?;
+    let odom_topic = topic("/odom", Odometry::type_name())?;
+    let scan_topic = topic("/scan", LaserScan::type_name())?;
+    let empowerment_topic = topic("/cstep/empowerment", Empowerment::type_name())?;
+    let reward_topic = topic("/cstep/reward", EmpoweredReward::type_name())?;
+    let goal_topic = topic("/goal_pose", PoseStamped::type_name())?;
     let fail = |e| format!("demo drone: {e:?}");
     let odom_pub = node
         .create_publisher::<Odometry>(&odom_topic, None)

@@ -23,6 +23,7 @@ use serde::Serialize;
 use super::context::{context_from_env, resolve};
 use super::messages::{
     DiagnosticArray, EmpoweredReward, Empowerment, LaserScan, MarkerArray, Odometry, PoseStamped,
+    RosMessage,
 };
 use super::yaml::to_yaml;
 
@@ -78,13 +79,13 @@ impl EchoType {
     /// Package and type name.
     pub fn parts(self) -> (&'static str, &'static str) {
         match self {
-            EchoType::Empowerment => ("cstep_msgs", "Empowerment"),
-            EchoType::EmpoweredReward => ("cstep_msgs", "EmpoweredReward"),
-            EchoType::DiagnosticArray => ("diagnostic_msgs", "DiagnosticArray"),
-            EchoType::MarkerArray => ("visualization_msgs", "MarkerArray"),
-            EchoType::Odometry => ("nav_msgs", "Odometry"),
-            EchoType::LaserScan => ("sensor_msgs", "LaserScan"),
-            EchoType::PoseStamped => ("geometry_msgs", "PoseStamped"),
+            EchoType::Empowerment => parts::<Empowerment>(),
+            EchoType::EmpoweredReward => parts::<EmpoweredReward>(),
+            EchoType::DiagnosticArray => parts::<DiagnosticArray>(),
+            EchoType::MarkerArray => parts::<MarkerArray>(),
+            EchoType::Odometry => parts::<Odometry>(),
+            EchoType::LaserScan => parts::<LaserScan>(),
+            EchoType::PoseStamped => parts::<PoseStamped>(),
         }
     }
 
@@ -151,6 +152,11 @@ impl EchoType {
         let (package, kind) = self.parts();
         MessageTypeName::new(package, kind)
     }
+}
+
+/// The package and type name of message type `M`, as [`RosMessage`] defines them.
+fn parts<M: RosMessage>() -> (&'static str, &'static str) {
+    (M::PACKAGE, M::NAME)
 }
 
 /// What discovery knows of a topic's publishers.

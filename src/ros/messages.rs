@@ -4,6 +4,7 @@
 //! (`cstep eval`, rosbridge-style) and CDR (the DDS wire format). Every field has a default so
 //! hand-written JSON may leave out what it does not need.
 
+use ros2_client::{MessageTypeName, ServiceTypeName};
 use serde::{Deserialize, Serialize};
 use serde_big_array::BigArray;
 
@@ -503,23 +504,83 @@ pub struct Clock {
     pub clock: Time,
 }
 
-/// Every type here travels over DDS with ros2-client.
+/// A message type cstep exchanges over DDS, with its ROS type name (`package/msg/Name`) given
+/// once, by the type: topics are created from it, so no caller spells the name again.
+pub trait RosMessage: ros2_client::Message {
+    /// The ROS package, e.g. `nav_msgs`.
+    const PACKAGE: &'static str;
+    /// The type's name in its package, e.g. `Odometry`.
+    const NAME: &'static str;
+
+    /// The type name ros2-client creates topics with.
+    fn type_name() -> MessageTypeName {
+        MessageTypeName::new(Self::PACKAGE, Self::NAME)
+    }
+}
+
+/// A service cstep serves, with its ROS type name (`package/srv/Name`) given once.
+pub trait RosService {
+    /// The request message.
+    type Request: ros2_client::Message;
+    /// The response message.
+    type Response: ros2_client::Message;
+    /// The ROS package, `cstep_msgs`.
+    const PACKAGE: &'static str;
+    /// The service's name in its package, e.g. `Evaluate`.
+    const NAME: &'static str;
+
+    /// The type name ros2-client creates servers and clients with.
+    fn type_name() -> ServiceTypeName {
+        ServiceTypeName::new(Self::PACKAGE, Self::NAME)
+    }
+}
+
+/// `cstep_msgs/srv/Evaluate`: one state scored ([`EvaluateRequest`] → [`EvaluateResponse`]).
+#[derive(Debug, Clone, Copy)]
+pub enum Evaluate {}
+
+/// `cstep_msgs/srv/EvaluateBatch`: K states scored in one call ([`EvaluateBatchRequest`] →
+/// [`EvaluateBatchResponse`]).
+#[derive(Debug, Clone, Copy)]
+pub enum EvaluateBatch {}
+
+/// Every topic type here travels over DDS with ros2-client, under the ROS type name given.
 macro_rules! ros_messages {
-    ($($t:ty),*) => { $(impl ros2_client::Message for $t {})* };
+    ($($t:ty => $package:literal / $name:literal),* $(,)?) => { $(
+        impl ros2_client::Message for $t {}
+        impl RosMessage for $t {
+            const PACKAGE: &'static str = $package;
+            const NAME: &'static str = $name;
+        }
+    )* };
 }
 ros_messages!(
-    Clock,
-    Odometry,
-    LaserScan,
-    PoseStamped,
-    Empowerment,
-    EmpoweredReward,
-    EvaluateRequest,
-    EvaluateResponse,
-    EvaluateBatchRequest,
-    EvaluateBatchResponse,
-    DiagnosticArray,
-    MarkerArray
+    Clock => "rosgraph_msgs" / "Clock",
+    Odometry => "nav_msgs" / "Odometry",
+    LaserScan => "sensor_msgs" / "LaserScan",
+    PoseStamped => "geometry_msgs" / "PoseStamped",
+    Empowerment => "cstep_msgs" / "Empowerment",
+    EmpoweredReward => "cstep_msgs" / "EmpoweredReward",
+    DiagnosticArray => "diagnostic_msgs" / "DiagnosticArray",
+    MarkerArray => "visualization_msgs" / "MarkerArray",
+);
+
+/// Every service here, with its request and response (which travel over DDS too).
+macro_rules! ros_services {
+    ($($s:ty => $package:literal / $name:literal: $request:ty, $response:ty);* $(;)?) => { $(
+        impl ros2_client::Message for $request {}
+        impl ros2_client::Message for $response {}
+        impl RosService for $s {
+            type Request = $request;
+            type Response = $response;
+            const PACKAGE: &'static str = $package;
+            const NAME: &'static str = $name;
+        }
+    )* };
+}
+ros_services!(
+    Evaluate => "cstep_msgs" / "Evaluate": EvaluateRequest, EvaluateResponse;
+    EvaluateBatch => "cstep_msgs" / "EvaluateBatch": EvaluateBatchRequest, EvaluateBatchResponse;
 );
 
 /// Scalar `float32` fields that refuse, in JSON, a number no `float32` holds: a finite number

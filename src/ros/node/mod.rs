@@ -1,0 +1,158 @@
+//! The ROS 2 node: odometry and scans in, C-STEP scores and rewards out, over ros2-client.
+//!
+//! One evaluation per scan, from the newest odometry, stamped with the scan's stamp. Scans
+//! arrive on the DDS thread and go into a one-slot mailbox; a worker thread scores whatever is
+//! newest, so a slow evaluation never builds a queue — a scan replaced before it was scored is
+//! counted as skipped. The `/cstep/evaluate` service scores a given state synchronously with the
+//! configured seed, so identical requests get identical answers; `/cstep/evaluate_batch` scores
+//! K states in one call, in parallel, each exactly as `/cstep/evaluate` would, and scores a state
+//! its caller reports in collision at the floor without rolling out. Diagnostics report input ages,
+//! counts of skipped, stale and rejected inputs, and the last score, once a second.
+//! Scans are scored only while someone subscribes to the scores (`/cstep/empowerment` or
+//! `/cstep/reward`), as lazy ROS publishers do: a simulation that takes its rewards from the
+//! service and publishes `/scan` for observers would otherwise pay for every evaluation twice.
+//! Likewise `/cstep/markers` (the sampled endpoints and their hull, [`super::markers`]) is built
+//! and published with a score only while a subscriber is matched. Both are decided per scan, as
+//! it arrives, from the matches the DDS side has recorded.
+
+mod clock;
+mod diagnostics;
+mod guard;
+mod params;
+mod ports;
+mod scoring;
+mod service;
+mod shared;
+mod tasks;
+
+use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use ros2_client::NodeName;
+use tracing::info;
+
+use super::args::RosArgs;
+use super::context::context_from_env;
+use super::logging;
+use super::rivals::Claims;
+use crate::config::DEFAULT_NODE_NAME;
+use crate::estimator::{robot_description, Estimator};
+
+use clock::NodeClock;
+use diagnostics::StatusIdentity;
+use guard::Guard;
+use params::{load_parameters, parameter_options};
+use ports::{Names, Ports};
+use scoring::{score_scans, Outputs};
+use shared::Shared;
+use tasks::serve;
+
+/// Runs the node until `stop` is set: loads the parameters files and `--ros-args`, joins the
+/// DDS domain `ROS_DOMAIN_ID` as far as `ROS_AUTOMATIC_DISCOVERY_RANGE` reaches
+/// ([`super::context`]), and serves. An error if another node already answers under its names
+/// on that domain ([`super::rivals`]): the node then stops within its first seconds.
+pub fn run(config: &[PathBuf], ros_args: &RosArgs, stop: Arc<AtomicBool>) -> Result<(), String> {
+    let node_name = ros_args.node_name(DEFAULT_NODE_NAME);
+    let namespace = ros_args.namespace(&node_name);
+    let rosout = logging::init(ros_args, &logging::logger_name(&namespace, &node_name))?;
+    refuse_security(ros_args)?;
+    let fqn = format!("{}/{node_name}", namespace.trim_end_matches('/'));
+    let (settings, interface, parameters) = load_parameters(config, ros_args, &fqn)?;
+    let estimator = Estimator::from_settings(&settings).map_err(|e| e.to_string())?;
+    let status = StatusIdentity {
+        // diagnostic_updater's convention: "<node's fully qualified name>: <task>".
+        name: format!("{fqn}: empowerment"),
+        hardware_id: robot_description(&settings)
+            .map_err(|e| e.to_string())?
+            .name,
+    };
+    let shared = Arc::new(Shared::new(
+        estimator,
+        settings.safety_coefficient,
+        Duration::from_secs_f64(interface.input_timeout),
+        interface.time_jump_tolerance,
+        stop,
+    ));
+
+    let context = context_from_env(true)?;
+    let options =
+        parameter_options(&shared, &parameters).enable_rosout(ros_args.rosout_logs != Some(false));
+    let mut node = context
+        .new_node(
+            NodeName::new(&namespace, &node_name).map_err(|e| format!("node name: {e:?}"))?,
+            options,
+        )
+        .map_err(|e| format!("cannot create the node: {e:?}"))?;
+    rosout.attach(node.logging_handle());
+    let names = Names::resolve(&interface, ros_args, &node_name, &namespace)?;
+    let ports = Ports::open(&mut node, &names)?;
+    let guard = Guard {
+        claims: Claims::new()
+            .topic(&names.empowerment)
+            .topic(&names.reward)
+            .service(&names.evaluate)
+            .service(&names.evaluate_batch),
+        participant: context.domain_participant(),
+        started: Instant::now(),
+        node: node.fully_qualified_name(),
+        domain: context.domain_id(),
+    };
+    info!(
+        "cstep node {} on ROS_DOMAIN_ID {}: {} + {} -> {}, {} (markers on {} while subscribed); \
+         services {}, {}",
+        node.fully_qualified_name(),
+        context.domain_id(),
+        names.odom,
+        names.scan,
+        names.empowerment,
+        names.reward,
+        names.markers,
+        names.evaluate,
+        names.evaluate_batch,
+    );
+
+    let worker = {
+        let shared = shared.clone();
+        let outputs = Outputs {
+            empowerment: ports.empowerment.clone(),
+            reward: ports.reward.clone(),
+            markers: ports.markers.clone(),
+        };
+        std::thread::spawn(move || score_scans(&shared, &outputs))
+    };
+    let executor = smol::LocalExecutor::new();
+    executor
+        .spawn(node.spinner().map_err(|e| format!("{e:?}"))?.spin())
+        .detach();
+    let clock = NodeClock::default();
+    smol::block_on(executor.run(serve(&shared, &ports, &node, &guard, &status, &clock)));
+    shared.stopping.store(true, Ordering::SeqCst);
+    shared.arrived.notify_all();
+    worker
+        .join()
+        .map_err(|_| "the scoring thread failed".to_owned())?;
+    if let Some(refusal) = shared.latest().refusal.take() {
+        return Err(refusal);
+    }
+    info!("cstep node stopped");
+    Ok(())
+}
+
+/// Refuses `ROS_SECURITY_ENABLE=true`: RustDDS is built here without DDS Security, so the node
+/// would run unencrypted where its user asked for security. Without it an enclave (`-e`) is
+/// unused, as rcl leaves it unused, and the node says so.
+fn refuse_security(ros_args: &RosArgs) -> Result<(), String> {
+    if std::env::var("ROS_SECURITY_ENABLE").as_deref() == Ok("true") {
+        return Err(
+            "ROS_SECURITY_ENABLE=true, but cstep cannot run secured (its DDS, RustDDS, \
+             is built without DDS Security); refusing to run unsecured"
+                .into(),
+        );
+    }
+    if let Some(enclave) = &ros_args.enclave {
+        info!("enclave {enclave} unused: ROS_SECURITY_ENABLE is not true");
+    }
+    Ok(())
+}

@@ -1,0 +1,60 @@
+//! The node's parameters: loading them at start-up, declaring them to ROS, and acting on the
+//! live ones.
+
+use std::path::PathBuf;
+use std::sync::Arc;
+
+use ros2_client::NodeOptions;
+use tracing::{debug, warn};
+
+use super::shared::Shared;
+use crate::config::{validate, NodeSettings, ParameterSet, Parameters};
+use crate::param_overrides::{ParamOverrides, ParamSource};
+use crate::parameters::Value;
+use crate::ros::args::RosArgs;
+
+/// The node's parameters: the built-in defaults, then the `--config` files and `--ros-args`
+/// overrides that apply to node `fqn` ([`crate::param_overrides`]), validated.
+pub(super) fn load_parameters(
+    config: &[PathBuf],
+    ros_args: &RosArgs,
+    fqn: &str,
+) -> Result<(crate::config::Settings, NodeSettings, Parameters), String> {
+    let sources: Vec<ParamSource> = config
+        .iter()
+        .cloned()
+        .map(ParamSource::File)
+        .chain(ros_args.params.iter().cloned())
+        .collect();
+    let overrides = ParamOverrides::read(&sources)?;
+    for warning in overrides.unmatched_files(fqn) {
+        warn!("{warning}");
+    }
+    let mut set = ParameterSet::builtin();
+    for o in overrides.for_node(fqn) {
+        debug!(
+            "parameter override {} = {} ({})",
+            o.name,
+            serde_json::to_string(&o.value).unwrap_or_default(),
+            o.source
+        );
+        set.insert(&o.name, o.value, &o.source, o.base_dir.as_deref());
+    }
+    validate(set).map_err(|e| e.to_string())
+}
+
+/// Declares every parameter ([`crate::ros::parameters`]); a `safety_coefficient` change takes effect
+/// at the next score. The others are read-only (they shape the control sample, the model and
+/// the topics), but `use_sim_time`, which ros2-client keeps itself ([`NodeClock`] reads it).
+pub(super) fn parameter_options(shared: &Arc<Shared>, parameters: &Parameters) -> NodeOptions {
+    let live = shared.clone();
+    let options = NodeOptions::new().start_parameter_services(true);
+    crate::ros::parameters::declare(options, parameters, move |p, value| {
+        if let ("safety_coefficient", Value::Double(c)) = (p.name, value) {
+            *live
+                .safety_coefficient
+                .lock()
+                .unwrap_or_else(|e| e.into_inner()) = *c;
+        }
+    })
+}

@@ -1,0 +1,201 @@
+//! Scoring: one state (odometry, scan, goal) to its score, reward and markers, and the thread
+//! that scores the newest scan.
+
+use std::sync::atomic::Ordering;
+use std::sync::Arc;
+use std::time::Duration;
+
+use ros2_client::Publisher;
+use tracing::debug;
+
+use super::shared::{PostedScan, Shared};
+use crate::reward::{empowered_reward, task_reward};
+use crate::ros::convert::{
+    empowerment_message, goal_position, laser_scan_to_scan, odometry_to_state, reward_message,
+};
+use crate::ros::markers::rollout_markers;
+use crate::ros::messages::{
+    EmpoweredReward, Empowerment, EvaluateBatchRequest, Header, LaserScan, MarkerArray, Odometry,
+    Point,
+};
+use crate::ros::stamps::Order;
+
+/// What the scoring thread publishes to.
+pub(super) struct Outputs {
+    pub(super) empowerment: Arc<Publisher<Empowerment>>,
+    pub(super) reward: Arc<Publisher<EmpoweredReward>>,
+    pub(super) markers: Arc<Publisher<MarkerArray>>,
+}
+
+/// The scoring thread: waits for a scan, scores it against the newest odometry, publishes the
+/// score, then the markers if someone subscribes to them.
+pub(super) fn score_scans(shared: &Shared, outputs: &Outputs) {
+    loop {
+        let PostedScan { scan, with_markers } = {
+            let mut mailbox = shared.mailbox.lock().unwrap_or_else(|e| e.into_inner());
+            loop {
+                if shared.stopping.load(Ordering::SeqCst) {
+                    return;
+                }
+                if let Some(next) = mailbox.take() {
+                    break next;
+                }
+                // Wakes for each scan, and at least every 100 ms to notice a stop.
+                mailbox = shared
+                    .arrived
+                    .wait_timeout(mailbox, Duration::from_millis(100))
+                    .unwrap_or_else(|e| e.into_inner())
+                    .0;
+            }
+        };
+        let Some((odom, seen)) = shared.latest().odom.clone() else {
+            shared.note_problem(|l| l.stale += 1, "no odometry received yet");
+            continue;
+        };
+        if seen.elapsed() > shared.timeout {
+            shared.note_problem(|l| l.stale += 1, "odometry is stale");
+            continue;
+        }
+        let stamp = scan.header.stamp;
+        let order = shared
+            .latest()
+            .order
+            .check(stamp, shared.time_jump_tolerance);
+        if order == Order::Late {
+            shared.note_problem(
+                |l| l.rejected += 1,
+                "scan stamp older than an earlier scan's",
+            );
+            continue;
+        }
+        let goal = shared.latest().goal;
+        let query = Query {
+            odom: &odom,
+            scan: &scan,
+            goal: goal.as_ref(),
+            in_collision: false,
+        };
+        match shared.score(&query, shared.safety_coefficient(), with_markers) {
+            Ok((e, r, markers)) => {
+                debug!(
+                    "scan {}.{:09}: empowerment {:.4} (valid: {}, {})",
+                    stamp.sec, stamp.nanosec, e.empowerment, e.valid, e.status
+                );
+                shared.scored(stamp, order);
+                // A full queue or a lost subscriber is not the node's failure; diagnostics show it.
+                if outputs.empowerment.publish(e).is_err() || outputs.reward.publish(r).is_err() {
+                    shared.note_problem(|_| {}, "publishing a score failed");
+                }
+                if let Some(markers) = markers {
+                    if outputs.markers.publish(markers).is_ok() {
+                        shared.latest().markers_published += 1;
+                    } else {
+                        shared.note_problem(|_| {}, "publishing markers failed");
+                    }
+                }
+            }
+            Err(problem) => shared.note_problem(|l| l.rejected += 1, &problem),
+        }
+    }
+}
+
+/// One state to score: a `/cstep/evaluate` request, one entry of a `/cstep/evaluate_batch`
+/// request, or a scan with the newest odometry and goal.
+pub(super) struct Query<'a> {
+    pub(super) odom: &'a Odometry,
+    pub(super) scan: &'a LaserScan,
+    /// Goal of the task reward; None for a task reward of 1.
+    pub(super) goal: Option<&'a Point>,
+    /// The caller reports the robot in collision: scored at the floor without rolling out.
+    pub(super) in_collision: bool,
+}
+
+impl<'a> Query<'a> {
+    /// The states of a batch request, or why its arrays cannot describe K states: `scan` must
+    /// hold as many entries as `odom`, `goal` and `has_goal` none or as many (both alike), and
+    /// `in_collision` none or as many.
+    pub(super) fn batch(request: &'a EvaluateBatchRequest) -> Result<Vec<Self>, String> {
+        let k = request.odom.len();
+        let optional = [
+            ("goal", request.goal.len()),
+            ("has_goal", request.has_goal.len()),
+            ("in_collision", request.in_collision.len()),
+        ];
+        if request.scan.len() != k {
+            return Err(format!(
+                "request: {} scans for {k} odometries (one scan per state)",
+                request.scan.len()
+            ));
+        }
+        if let Some((name, n)) = optional.into_iter().find(|&(_, n)| n != 0 && n != k) {
+            return Err(format!(
+                "request: {name} has {n} entries for {k} states (0 or {k})"
+            ));
+        }
+        if request.goal.len() != request.has_goal.len() {
+            return Err(format!(
+                "request: goal has {} entries and has_goal {} (both or neither)",
+                request.goal.len(),
+                request.has_goal.len()
+            ));
+        }
+        Ok((0..k)
+            .map(|i| Query {
+                odom: &request.odom[i],
+                scan: &request.scan[i],
+                goal: (request.has_goal.get(i) == Some(&true)).then(|| &request.goal[i]),
+                in_collision: request.in_collision.get(i) == Some(&true),
+            })
+            .collect())
+    }
+}
+impl Shared {
+    /// Scores one state with safety coefficient `c`, with the markers of the evaluation if
+    /// asked; a malformed input is an error naming the field.
+    pub(super) fn score(
+        &self,
+        query: &Query,
+        c: f64,
+        with_markers: bool,
+    ) -> Result<(Empowerment, EmpoweredReward, Option<MarkerArray>), String> {
+        let state = odometry_to_state(query.odom).map_err(|e| format!("odometry: {e}"))?;
+        let scan = laser_scan_to_scan(query.scan).map_err(|e| format!("scan: {e}"))?;
+        let goal = query
+            .goal
+            .map(goal_position)
+            .transpose()
+            .map_err(|e| e.to_string())?;
+        let estimate = if query.in_collision {
+            self.estimator.known_collision()
+        } else {
+            self.estimator.evaluate(&state, &scan)
+        };
+        let reward = empowered_reward(
+            estimate.empowerment,
+            c,
+            task_reward(&state.position, goal.as_ref()),
+        );
+        let header = Header {
+            stamp: query.scan.header.stamp,
+            frame_id: query.odom.header.frame_id.clone(),
+        };
+        {
+            let mut latest = self.latest();
+            latest.scored += 1;
+            latest.last_score = Some((estimate.empowerment, estimate.valid(), estimate.elapsed));
+        }
+        let markers = with_markers.then(|| {
+            rollout_markers(
+                &header,
+                &state.position,
+                &estimate.rollout,
+                self.timeout.as_secs_f64(),
+            )
+        });
+        Ok((
+            empowerment_message(header.clone(), &estimate, c),
+            reward_message(header, &reward, c, estimate.valid()),
+            markers,
+        ))
+    }
+}

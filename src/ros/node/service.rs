@@ -1,0 +1,297 @@
+//! The `/cstep/evaluate` and `/cstep/evaluate_batch` services' answers.
+
+use rayon::prelude::*;
+
+use super::scoring::Query;
+use super::shared::Shared;
+use crate::estimator::EMPOWERMENT_FLOOR;
+use crate::reward::floor_reward;
+use crate::ros::convert::reward_message;
+use crate::ros::messages::{
+    EmpoweredReward, Empowerment, EvaluateBatchRequest, EvaluateBatchResponse, EvaluateRequest,
+    EvaluateResponse, Header,
+};
+
+impl Shared {
+    /// The service answer for one state: its score, or for a malformed one the floor with
+    /// `valid = false` and the reason (counted as rejected).
+    fn answer(&self, query: &Query, c: f64) -> (Empowerment, EmpoweredReward) {
+        match self.score(query, c, false) {
+            Ok((empowerment, reward, _)) => (empowerment, reward),
+            Err(problem) => {
+                self.note_problem(|l| l.rejected += 1, &problem);
+                self.rejected(query.scan.header.clone(), problem, c)
+            }
+        }
+    }
+
+    /// The answer for a state that could not be scored: the floor, `valid = false`, `problem`
+    /// as the status, stamped with `header`; its reward is the lowest a collision can score
+    /// ([`floor_reward`]), so malformed input never pays better than hitting a wall.
+    fn rejected(&self, header: Header, problem: String, c: f64) -> (Empowerment, EmpoweredReward) {
+        (
+            Empowerment {
+                header: header.clone(),
+                empowerment: EMPOWERMENT_FLOOR,
+                safety_coefficient: c,
+                horizon: self.estimator.settings().horizon,
+                num_trajectories: self.estimator.settings().trajectories as u32,
+                valid: false,
+                status: problem,
+                ..Default::default()
+            },
+            reward_message(header, &floor_reward(c), c, false),
+        )
+    }
+
+    /// Answers `/cstep/evaluate`; a malformed request gets `valid = false` and the reason.
+    pub(super) fn evaluate_request(&self, request: &EvaluateRequest) -> EvaluateResponse {
+        let query = Query {
+            odom: &request.odom,
+            scan: &request.scan,
+            goal: request.has_goal.then_some(&request.goal),
+            in_collision: false,
+        };
+        let (empowerment, reward) = self.answer(&query, self.safety_coefficient());
+        EvaluateResponse {
+            empowerment,
+            reward,
+        }
+    }
+
+    /// Answers `/cstep/evaluate_batch`: each state exactly as [`Self::evaluate_request`] would
+    /// answer it alone (one safety coefficient for the whole batch), the states scored in
+    /// parallel on rayon's pool. When the request's arrays disagree in length, every state
+    /// (as many as the longer of `odom` and `scan`) is answered `valid = false` with the reason.
+    pub(super) fn evaluate_batch(&self, request: &EvaluateBatchRequest) -> EvaluateBatchResponse {
+        let c = self.safety_coefficient();
+        let answers: Vec<_> = match Query::batch(request) {
+            Ok(queries) => queries.par_iter().map(|q| self.answer(q, c)).collect(),
+            Err(problem) => {
+                self.note_problem(|l| l.rejected += 1, &problem);
+                let states = request.odom.len().max(request.scan.len());
+                (0..states)
+                    .map(|i| {
+                        let header = request.scan.get(i).map(|s| s.header.clone());
+                        self.rejected(header.unwrap_or_default(), problem.clone(), c)
+                    })
+                    .collect()
+            }
+        };
+        let (empowerment, reward) = answers.into_iter().unzip();
+        EvaluateBatchResponse {
+            empowerment,
+            reward,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::sync::Arc;
+    use std::time::Duration;
+
+    use super::*;
+    use crate::config::Settings;
+    use crate::estimator::Estimator;
+    use crate::ros::convert::scan_to_laser_scan;
+    use crate::ros::messages::{LaserScan, Odometry, Point, Time};
+    use crate::scene::{Lidar, Scene};
+    use nalgebra::{UnitQuaternion, Vector2};
+
+    fn shared(c: f64) -> Shared {
+        let estimator = Estimator::from_settings(&Settings::builtin()).unwrap();
+        Shared::new(estimator, c, Duration::from_secs(1), 1.0, Arc::default())
+    }
+
+    /// The robot at (x, y, 1) in a 2.5 m corridor flying along it at `speed`, and its scan.
+    fn state(x: f64, y: f64, speed: f64) -> (Odometry, LaserScan) {
+        let mut odom = Odometry::default();
+        odom.header.frame_id = "odom".into();
+        odom.pose.pose.position = Point { x, y, z: 1.0 };
+        odom.twist.twist.linear.x = speed;
+        let lidar = Lidar {
+            beams: 180,
+            range_min: 0.02,
+            range_max: 3.0,
+        };
+        let scan = Scene::corridor(2.5, 20.0).scan(
+            Vector2::new(x, y),
+            &UnitQuaternion::identity(),
+            &lidar,
+        );
+        let header = Header {
+            stamp: Time {
+                sec: (10.0 * x) as i32,
+                nanosec: 7,
+            },
+            frame_id: "base_link".into(),
+        };
+        (odom, scan_to_laser_scan(&scan, header))
+    }
+
+    /// Four states, the second and fourth with goals.
+    fn batch() -> EvaluateBatchRequest {
+        let states: Vec<_> = [
+            (0.0, 0.0, 0.0),
+            (1.0, 0.8, 1.5),
+            (2.0, -0.9, -1.0),
+            (3.0, 0.2, 3.0),
+        ]
+        .iter()
+        .map(|&(x, y, v)| state(x, y, v))
+        .collect();
+        EvaluateBatchRequest {
+            odom: states.iter().map(|s| s.0.clone()).collect(),
+            scan: states.iter().map(|s| s.1.clone()).collect(),
+            goal: (0..4)
+                .map(|i| Point {
+                    x: 4.0 + i as f64,
+                    y: 0.0,
+                    z: 1.0,
+                })
+                .collect(),
+            has_goal: vec![false, true, false, true],
+            in_collision: vec![],
+        }
+    }
+
+    /// Entry `i` of a batch as its own `/cstep/evaluate` request.
+    fn single(batch: &EvaluateBatchRequest, i: usize) -> EvaluateRequest {
+        EvaluateRequest {
+            odom: batch.odom[i].clone(),
+            scan: batch.scan[i].clone(),
+            goal: batch.goal[i],
+            has_goal: batch.has_goal[i],
+        }
+    }
+
+    #[test]
+    fn a_batch_answers_each_state_as_the_single_service_does() {
+        let node = shared(0.7);
+        let request = batch();
+        let answer = node.evaluate_batch(&request);
+        assert_eq!(answer.empowerment.len(), 4);
+        for i in 0..4 {
+            let alone = node.evaluate_request(&single(&request, i));
+            assert_eq!(answer.empowerment[i], alone.empowerment, "state {i}");
+            assert_eq!(answer.reward[i], alone.reward, "state {i}");
+            assert!(alone.empowerment.valid, "{:?}", alone.empowerment);
+        }
+        let distinct: std::collections::HashSet<u64> = answer
+            .empowerment
+            .iter()
+            .map(|e| e.empowerment.to_bits())
+            .collect();
+        assert_eq!(distinct.len(), 4, "the states differ, so do their scores");
+    }
+
+    #[test]
+    fn a_state_reported_in_collision_scores_the_floor_without_rolling_out() {
+        let c = 0.5;
+        let node = shared(c);
+        let mut request = batch();
+        request.in_collision = vec![false, true, false, false];
+        let answer = node.evaluate_batch(&request);
+        let (e, r) = (&answer.empowerment[1], &answer.reward[1]);
+        assert_eq!(e.empowerment, EMPOWERMENT_FLOOR);
+        assert!(!e.valid && !r.valid);
+        assert_eq!(e.status, "robot already in collision");
+        assert_eq!((e.free_volume, e.num_colliding), (0.0, e.num_trajectories));
+        let task = (-4.0_f64.hypot(0.8)).exp(); // goal (5, 0, 1), robot at (1, 0.8, 1)
+        assert!((r.task_reward - task).abs() < 1e-12);
+        assert_eq!(r.empowerment_term, c.ln() + EMPOWERMENT_FLOOR);
+        assert_eq!(r.reward, r.task_reward * r.empowerment_term);
+        // The other states are untouched by their neighbour's collision.
+        let alone = node.evaluate_request(&single(&request, 2));
+        assert_eq!(answer.empowerment[2], alone.empowerment);
+    }
+
+    #[test]
+    fn a_malformed_entry_is_rejected_alone_and_never_nan() {
+        let node = shared(1.0);
+        let mut request = batch();
+        request.scan[1].angle_increment = 0.0;
+        request.odom[2].pose.pose.orientation.w = 0.0;
+        request.goal[3].x = f64::NAN;
+        let answer = node.evaluate_batch(&request);
+        assert!(answer.empowerment[0].valid);
+        for (i, field) in [
+            (1, "scan: angle_increment"),
+            (2, "odometry: pose.pose.orientation"),
+            (3, "goal"),
+        ] {
+            let (e, r) = (&answer.empowerment[i], &answer.reward[i]);
+            assert!(!e.valid && !r.valid, "state {i}");
+            assert!(e.status.starts_with(field), "state {i}: {}", e.status);
+            assert_eq!(e.header, request.scan[i].header);
+            for v in [e.empowerment, r.reward, r.task_reward, r.empowerment_term] {
+                assert!(v.is_finite(), "state {i}: {v}");
+            }
+        }
+        assert_eq!(node.latest().rejected, 3);
+    }
+
+    #[test]
+    fn a_malformed_request_never_scores_better_than_a_collision() {
+        // Issue 12, failure 9: a malformed request answered reward 0.0, better than the
+        // floor a robot touching a wall scores, so bad input paid.
+        for c in [0.2, 1.0, 3.0, 5e4] {
+            let node = shared(c);
+            let mut request = batch();
+            request.in_collision = vec![true, true, false, false];
+            request.scan[2].angle_increment = 0.0;
+            request.odom[3].pose.pose.position.x = f64::NAN;
+            let answer = node.evaluate_batch(&request);
+            let mut single = single(&request, 3);
+            single.scan.range_max = -1.0;
+            let alone = node.evaluate_request(&single).reward;
+            let collisions = &answer.reward[..2];
+            for (i, r) in answer.reward[2..].iter().chain([&alone]).enumerate() {
+                assert!(!r.valid);
+                for hit in collisions {
+                    assert!(
+                        r.reward <= hit.reward,
+                        "c {c}, rejected {i}: {r:?} vs {hit:?}"
+                    );
+                }
+                assert_eq!(r.reward, r.task_reward * r.empowerment_term, "{r:?}");
+                assert_eq!(r.empowerment_term, c.ln() + EMPOWERMENT_FLOOR);
+            }
+        }
+    }
+
+    #[test]
+    fn arrays_of_disagreeing_lengths_reject_every_state_with_the_reason() {
+        let node = shared(1.0);
+        type Spoil = fn(&mut EvaluateBatchRequest);
+        let cases: [(Spoil, &str); 4] = [
+            (|r| r.scan.truncate(3), "request: 3 scans for 4 odometries"),
+            (
+                |r| r.in_collision = vec![true],
+                "request: in_collision has 1 entries for 4 states",
+            ),
+            (
+                |r| r.goal.clear(),
+                "request: goal has 0 entries and has_goal 4",
+            ),
+            (
+                |r| r.has_goal.truncate(3),
+                "request: has_goal has 3 entries for 4 states",
+            ),
+        ];
+        for (spoil, status) in cases {
+            let mut request = batch();
+            spoil(&mut request);
+            let answer = node.evaluate_batch(&request);
+            assert_eq!(answer.empowerment.len(), 4, "{status}");
+            assert_eq!(answer.reward.len(), 4, "{status}");
+            for e in &answer.empowerment {
+                assert!(!e.valid && e.status.starts_with(status), "{}", e.status);
+                assert_eq!(e.empowerment, EMPOWERMENT_FLOOR);
+            }
+        }
+        let empty = node.evaluate_batch(&EvaluateBatchRequest::default());
+        assert!(empty.empowerment.is_empty() && empty.reward.is_empty());
+    }
+}

@@ -364,7 +364,7 @@ pub const PARAMETERS: &[Parameter] = &[
         unit: Some("s"),
         description: "Odometry older than this when a scan arrives is stale: no score, \
             diagnostics STALE.",
-        change: Change::ReadOnly,
+        change: Change::Live,
     },
     Parameter {
         name: "time_jump_tolerance",

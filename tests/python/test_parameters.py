@@ -1,8 +1,8 @@
 """Every parameter of a live `cstep node` over the standard ROS 2 parameter services, as rclpy's
 own parameter client (what `ros2 param` uses) sees them over real DDS: listed, described from
 the one table in src/parameters.rs (via config/cstep.yaml, written from it), read back as
-configured, read-only ones refusing a set with a reason, and a live `safety_coefficient` change
-showing in the next score."""
+configured, read-only ones refusing a set with a reason, and live `safety_coefficient` and
+`input_timeout` changes taking effect at the next scan."""
 
 import math
 import os
@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 import yaml
 from conftest import REPO, wait_until
-from node_rig import CONFIG, cstep_binary, stop_gently
+from node_rig import CONFIG, corridor_scan, cstep_binary, odometry, stop_gently
 from rcl_interfaces.msg import ParameterType
 from rclpy.node import Node
 from rclpy.parameter import Parameter, parameter_value_to_python
@@ -156,3 +156,29 @@ def test_a_safety_coefficient_set_through_the_client_shows_in_the_next_score(rig
     assert reward.safety_coefficient == 0.25
     got = call(client.get_parameters(["safety_coefficient"]), executor, "get")
     assert parameter_value_to_python(got.values[0]) == 0.25
+
+
+def test_an_input_timeout_set_through_the_client_judges_the_next_scan(rig, executor):
+    """Odometry 1.5 s old is stale at the default 0.5 s and fresh at 5 s: scans alone are then
+    scored (no score at the default), and the diagnostics stop saying STALE."""
+    client = AsyncParameterClient(rig.node, "/cstep_node")
+    wait_until(client.services_are_ready, "the node's parameter services", executor)
+
+    def scans_after_old_odometry(first_sec: int) -> list[int]:
+        rig.odom.publish(odometry())
+        rig.spin_for(1.5)
+        for k in range(5):
+            rig.scan.publish(corridor_scan(first_sec + k))
+            rig.spin_for(0.05)
+        rig.spin_for(1.0)
+        return [m.header.stamp.sec for m in rig.empowerment if m.header.stamp.sec >= first_sec]
+
+    assert scans_after_old_odometry(6000) == []
+    reply = call(client.set_parameters([Parameter("input_timeout", value=5.0)]), executor, "set")
+    assert reply.results[0].successful, reply.results[0].reason
+    assert scans_after_old_odometry(6100) == [6100, 6101, 6102, 6103, 6104]
+    got = call(client.get_parameters(["input_timeout"]), executor, "get")
+    assert parameter_value_to_python(got.values[0]) == 5.0
+    refused = call(client.set_parameters([Parameter("input_timeout", value=-1.0)]), executor, "set")
+    assert not refused.results[0].successful
+    assert "'input_timeout' must be a positive number" in refused.results[0].reason

@@ -20,7 +20,8 @@ impl Shared {
         let age = |t: Option<Instant>| t.map(|t| t.elapsed().as_secs_f64());
         let odom_age = age(latest.odom.as_ref().map(|(_, t)| *t));
         let scan_age = age(latest.last_scan);
-        let fresh = |a: Option<f64>| a.is_some_and(|a| a <= self.timeout.as_secs_f64());
+        let timeout = self.timeout().as_secs_f64();
+        let fresh = |a: Option<f64>| a.is_some_and(|a| a <= timeout);
         let jump = latest.time_jump.take();
         let (level, message) = if let Some(rival) = &latest.rival {
             (

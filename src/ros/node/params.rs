@@ -3,6 +3,7 @@
 
 use std::path::PathBuf;
 use std::sync::Arc;
+use std::time::Duration;
 
 use ros2_client::NodeOptions;
 use tracing::{debug, warn};
@@ -43,18 +44,22 @@ pub(super) fn load_parameters(
     validate(set).map_err(|e| e.to_string())
 }
 
-/// Declares every parameter ([`crate::ros::parameters`]); a `safety_coefficient` change takes effect
-/// at the next score. The others are read-only (they shape the control sample, the model and
+/// Declares every parameter ([`crate::ros::parameters`]); a `safety_coefficient` or
+/// `input_timeout` change takes effect at the next scan. The others are read-only (they shape the control sample, the model and
 /// the topics), but `use_sim_time`, which ros2-client keeps itself ([`NodeClock`] reads it).
 pub(super) fn parameter_options(shared: &Arc<Shared>, parameters: &Parameters) -> NodeOptions {
     let live = shared.clone();
     let options = NodeOptions::new().start_parameter_services(true);
-    crate::ros::parameters::declare(options, parameters, move |p, value| {
-        if let ("safety_coefficient", Value::Double(c)) = (p.name, value) {
+    crate::ros::parameters::declare(options, parameters, move |p, value| match (p.name, value) {
+        ("safety_coefficient", Value::Double(c)) => {
             *live
                 .safety_coefficient
                 .lock()
                 .unwrap_or_else(|e| e.into_inner()) = *c;
         }
+        ("input_timeout", Value::Double(t)) => {
+            *live.timeout.lock().unwrap_or_else(|e| e.into_inner()) = Duration::from_secs_f64(*t);
+        }
+        _ => {}
     })
 }

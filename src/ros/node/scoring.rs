@@ -52,7 +52,7 @@ pub(super) fn score_scans(shared: &Shared, outputs: &Outputs) {
             shared.note_problem(|l| l.stale += 1, "no odometry received yet");
             continue;
         };
-        if seen.elapsed() > shared.timeout {
+        if seen.elapsed() > shared.timeout() {
             shared.note_problem(|l| l.stale += 1, "odometry is stale");
             continue;
         }
@@ -189,7 +189,7 @@ impl Shared {
                 &header,
                 &state.position,
                 &estimate.rollout,
-                self.timeout.as_secs_f64(),
+                self.timeout().as_secs_f64(),
             )
         });
         Ok((

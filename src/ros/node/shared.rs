@@ -1,5 +1,5 @@
 //! The state the DDS side and the scoring thread share: the estimator, the live safety
-//! coefficient, the newest inputs and running counts, and the one-slot scan mailbox.
+//! coefficient and input timeout, the newest inputs and running counts, and the one-slot scan mailbox.
 
 use std::sync::atomic::AtomicBool;
 use std::sync::{Arc, Condvar, Mutex};
@@ -13,7 +13,8 @@ use crate::ros::stamps::{Order, StampOrder};
 pub(super) struct Shared {
     pub(super) estimator: Estimator,
     pub(super) safety_coefficient: Mutex<f64>,
-    pub(super) timeout: Duration,
+    /// `input_timeout`: odometry older than this when a scan arrives is stale (live).
+    pub(super) timeout: Mutex<Duration>,
     /// Seconds a scan stamp may lie behind the newest scored before it means time jumped back.
     pub(super) time_jump_tolerance: f64,
     pub(super) latest: Mutex<Latest>,
@@ -76,7 +77,7 @@ impl Shared {
         Self {
             estimator,
             safety_coefficient: Mutex::new(c),
-            timeout,
+            timeout: Mutex::new(timeout),
             time_jump_tolerance,
             latest: Mutex::default(),
             mailbox: Mutex::new(None),
@@ -109,6 +110,11 @@ impl Shared {
             .safety_coefficient
             .lock()
             .unwrap_or_else(|e| e.into_inner())
+    }
+
+    /// The input timeout in effect now.
+    pub(super) fn timeout(&self) -> Duration {
+        *self.timeout.lock().unwrap_or_else(|e| e.into_inner())
     }
 
     /// Counts a `what` (a message, a request) that `input` could not decode (malformed CDR: a

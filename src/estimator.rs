@@ -43,6 +43,9 @@ pub enum Status {
     EmptyScan,
     /// No beam of the scan holds a usable reading.
     NoValidBeams,
+    /// The input could not be scored (a malformed state, scan or goal); front ends publish
+    /// the reason instead of this status's text.
+    InvalidInput,
 }
 
 impl Status {
@@ -60,6 +63,7 @@ impl Status {
             Status::InCollision => "robot already in collision",
             Status::EmptyScan => "scan has no beams",
             Status::NoValidBeams => "scan has no valid beams",
+            Status::InvalidInput => "invalid input",
         }
     }
 }
@@ -235,6 +239,15 @@ impl Estimator {
     /// overlapping an obstacle, without reading a scan or rolling out.
     pub fn known_collision(&self) -> Estimate {
         self.floor(Status::InCollision)
+    }
+
+    /// The estimate of input that could not be scored: the floor with [`Status::InvalidInput`],
+    /// no trajectory counted as colliding (none was rolled out).
+    pub fn invalid_input(&self) -> Estimate {
+        Estimate {
+            num_colliding: 0,
+            ..self.floor(Status::InvalidInput)
+        }
     }
 
     /// The floor estimate with `status`: zero volumes, every trajectory counted as colliding,

@@ -14,7 +14,9 @@
 //! 4. [`occupancy`] — the free space seen by a 2D LiDAR scan, inflated by the robot's radius;
 //! 5. [`volume`] — reachable and terminal volumes from the rollout endpoints;
 //! 6. [`estimator`] — Algorithm 1 end to end;
-//! 7. [`reward`] — the empowered reward `r_d · log(c · λ)`.
+//! 7. [`reward`] — the empowered reward `r_d · log(c · λ)`;
+//! 8. [`scoring`] — one step, state + scan + goal + `c` → estimate + reward, the one path every
+//!    front end (the node, its services, `cstep eval`) scores through.
 //!
 //! [`parameters`] defines every parameter once (type, default, range, unit, description, live or
 //! read-only); [`config`] reads the node's `ros__parameters` YAML against it; [`ros`] holds the
@@ -35,5 +37,6 @@ pub mod rollout;
 pub mod ros;
 pub mod sampling;
 pub mod scene;
+pub mod scoring;
 pub mod state;
 pub mod volume;

@@ -13,12 +13,12 @@ use std::sync::OnceLock;
 
 use cstep::config::{Settings, DEFAULT_NODE_NAME};
 use cstep::estimator::Estimator;
-use cstep::reward::{empowered_reward, floor_reward, task_reward};
 use cstep::ros::convert::{
     empowerment_message, goal_position, laser_scan_to_scan, odometry_to_state, reward_message,
     InputError, MAX_ANGULAR_RATE, MAX_BEAMS, MAX_COORDINATE, MAX_SPEED,
 };
 use cstep::ros::messages::{Header, LaserScan, Odometry, Point, Quaternion, Vector3};
+use cstep::scoring::{score, unscorable, Score};
 use proptest::prelude::*;
 
 /// Longest error message accepted.
@@ -287,12 +287,7 @@ fn check_scored(
         Err(e) => return check_error(&e),
     };
     let (estimator, c) = &estimators()[which];
-    let estimate = estimator.evaluate(&state, &parsed);
-    let reward = empowered_reward(
-        estimate.empowerment,
-        *c,
-        task_reward(&state.position, goal.as_ref()),
-    );
+    let Score { estimate, reward } = score(estimator, &state, &parsed, goal.as_ref(), *c, false);
     let e = empowerment_message(Header::default(), &estimate, *c);
     let r = reward_message(Header::default(), &reward, *c, estimate.valid());
     for (name, v) in [
@@ -309,7 +304,7 @@ fn check_scored(
     }
     prop_assert!((0.0..=1.0).contains(&r.task_reward), "{r:?}");
     // No score is below the one a rejected input gets.
-    prop_assert!(r.reward >= floor_reward(*c).reward, "{r:?}");
+    prop_assert!(r.reward >= unscorable(estimator, *c).reward.reward, "{r:?}");
     Ok(())
 }
 

@@ -9,11 +9,11 @@ use serde_json::Value;
 
 use cstep::config::{Settings, DEFAULT_NODE_NAME};
 use cstep::estimator::Estimator;
-use cstep::reward::{empowered_reward, task_reward};
 use cstep::ros::convert::{
     empowerment_message, goal_position, laser_scan_to_scan, odometry_to_state,
 };
 use cstep::ros::messages::{Empowerment, Header, LaserScan, Odometry, Point};
+use cstep::scoring::{score, Score};
 
 use super::Format;
 
@@ -73,11 +73,13 @@ pub fn run(args: EvalArgs) -> Result<(), String> {
         .transpose()?;
 
     let estimator = Estimator::from_settings(&settings).map_err(|e| e.to_string())?;
-    let estimate = estimator.evaluate(&state, &scan);
-    let reward = empowered_reward(
-        estimate.empowerment,
+    let Score { estimate, reward } = score(
+        &estimator,
+        &state,
+        &scan,
+        goal.as_ref(),
         settings.safety_coefficient,
-        task_reward(&state.position, goal.as_ref()),
+        false,
     );
     let header = Header {
         stamp: scan_msg.header.stamp,

@@ -9,7 +9,6 @@ use ros2_client::Publisher;
 use tracing::debug;
 
 use super::shared::{PostedScan, Shared};
-use crate::reward::{empowered_reward, task_reward};
 use crate::ros::convert::{
     empowerment_message, goal_position, laser_scan_to_scan, odometry_to_state, reward_message,
 };
@@ -19,6 +18,7 @@ use crate::ros::messages::{
     Point,
 };
 use crate::ros::stamps::Order;
+use crate::scoring::{score, Score};
 
 /// What the scoring thread publishes to.
 pub(super) struct Outputs {
@@ -165,15 +165,13 @@ impl Shared {
             .map(goal_position)
             .transpose()
             .map_err(|e| e.to_string())?;
-        let estimate = if query.in_collision {
-            self.estimator.known_collision()
-        } else {
-            self.estimator.evaluate(&state, &scan)
-        };
-        let reward = empowered_reward(
-            estimate.empowerment,
+        let Score { estimate, reward } = score(
+            &self.estimator,
+            &state,
+            &scan,
+            goal.as_ref(),
             c,
-            task_reward(&state.position, goal.as_ref()),
+            query.in_collision,
         );
         let header = Header {
             stamp: query.scan.header.stamp,

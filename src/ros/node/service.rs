@@ -4,13 +4,12 @@ use rayon::prelude::*;
 
 use super::scoring::Query;
 use super::shared::Shared;
-use crate::estimator::EMPOWERMENT_FLOOR;
-use crate::reward::floor_reward;
-use crate::ros::convert::reward_message;
+use crate::ros::convert::{empowerment_message, reward_message};
 use crate::ros::messages::{
     EmpoweredReward, Empowerment, EvaluateBatchRequest, EvaluateBatchResponse, EvaluateRequest,
     EvaluateResponse, Header,
 };
+use crate::scoring::{unscorable, Score};
 
 impl Shared {
     /// The service answer for one state: its score, or for a malformed one the floor with
@@ -25,22 +24,18 @@ impl Shared {
         }
     }
 
-    /// The answer for a state that could not be scored: the floor, `valid = false`, `problem`
-    /// as the status, stamped with `header`; its reward is the lowest a collision can score
-    /// ([`floor_reward`]), so malformed input never pays better than hitting a wall.
+    /// The answer for a state that could not be scored: its [`unscorable`] score, `problem` as
+    /// the status, stamped with `header`; its reward is the lowest a collision can score, so
+    /// malformed input never pays better than hitting a wall.
     fn rejected(&self, header: Header, problem: String, c: f64) -> (Empowerment, EmpoweredReward) {
+        let Score { estimate, reward } = unscorable(&self.estimator, c);
+        let empowerment = Empowerment {
+            status: problem,
+            ..empowerment_message(header.clone(), &estimate, c)
+        };
         (
-            Empowerment {
-                header: header.clone(),
-                empowerment: EMPOWERMENT_FLOOR,
-                safety_coefficient: c,
-                horizon: self.estimator.settings().horizon,
-                num_trajectories: self.estimator.settings().trajectories as u32,
-                valid: false,
-                status: problem,
-                ..Default::default()
-            },
-            reward_message(header, &floor_reward(c), c, false),
+            empowerment,
+            reward_message(header, &reward, c, estimate.valid()),
         )
     }
 
@@ -93,7 +88,7 @@ mod tests {
 
     use super::*;
     use crate::config::Settings;
-    use crate::estimator::Estimator;
+    use crate::estimator::{Estimator, EMPOWERMENT_FLOOR};
     use crate::ros::convert::scan_to_laser_scan;
     use crate::ros::messages::{LaserScan, Odometry, Point, Time};
     use crate::scene::{Lidar, Scene};

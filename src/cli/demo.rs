@@ -62,7 +62,7 @@ pub fn run(args: DemoArgs) -> Result<(), String> {
         .join()
         .map_err(|_| "the node thread failed".to_owned())?;
     let samples = flown?;
-    node_result?;
+    node_result.map_err(|e| e.to_string())?;
     summarize(&samples);
     if let Some(dir) = args.plot.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;

@@ -8,6 +8,7 @@ use ros2_client::NodeOptions;
 use tracing::{debug, warn};
 
 use super::shared::Shared;
+use super::NodeError;
 use crate::config::{validate, NodeSettings, ParameterSet, Parameters};
 use crate::parameters::Value;
 use crate::ros::args::RosArgs;
@@ -19,14 +20,14 @@ pub(super) fn load_parameters(
     config: &[PathBuf],
     ros_args: &RosArgs,
     fqn: &str,
-) -> Result<(crate::config::Settings, NodeSettings, Parameters), String> {
+) -> Result<(crate::config::Settings, NodeSettings, Parameters), NodeError> {
     let sources: Vec<ParamSource> = config
         .iter()
         .cloned()
         .map(ParamSource::File)
         .chain(ros_args.params.iter().cloned())
         .collect();
-    let overrides = ParamOverrides::read(&sources)?;
+    let overrides = ParamOverrides::read(&sources).map_err(NodeError::ParameterOverrides)?;
     for warning in overrides.unmatched_files(fqn) {
         warn!("{warning}");
     }
@@ -40,7 +41,7 @@ pub(super) fn load_parameters(
         );
         set.insert(&o.name, o.value, &o.source, o.base_dir.as_deref());
     }
-    validate(set).map_err(|e| e.to_string())
+    Ok(validate(set)?)
 }
 
 /// Declares every parameter ([`crate::ros::parameters`]); a `safety_coefficient` change takes effect

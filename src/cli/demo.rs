@@ -91,7 +91,7 @@ struct Scored {
 
 /// Flies the drone: publishes odometry and scans at 10 Hz and collects the node's answers.
 fn fly(args: &DemoArgs, stop: &std::sync::atomic::AtomicBool) -> Result<Vec<Scored>, String> {
-    let context = context_from_env(false)?;
+    let context = context_from_env(false).map_err(|e| e.to_string())?;
     let mut node = context
         .new_node(
             NodeName::new("/", "cstep_demo_drone").map_err(|e| format!("{e:?}"))?,

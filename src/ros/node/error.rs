@@ -3,6 +3,7 @@
 
 use crate::config::ConfigError;
 use crate::model::urdf::UrdfError;
+use crate::ros::context::ContextError;
 
 /// Why [`super::run`] failed.
 #[derive(Debug, thiserror::Error)]
@@ -26,8 +27,8 @@ pub enum NodeError {
     #[error(transparent)]
     Robot(#[from] UrdfError),
     /// The DDS context could not be set up from the environment.
-    #[error("{0}")]
-    Context(String),
+    #[error(transparent)]
+    Context(#[from] ContextError),
     /// The node's name or namespace is not a valid ROS name.
     #[error("node name: {0}")]
     NodeName(String),

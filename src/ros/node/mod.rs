@@ -77,7 +77,7 @@ pub fn run(config: &[PathBuf], ros_args: &RosArgs, stop: Arc<AtomicBool>) -> Res
         stop,
     ));
 
-    let context = context_from_env(true).map_err(NodeError::Context)?;
+    let context = context_from_env(true)?;
     let options = parameter_options(&shared, &parameters);
     let mut node = context
         .new_node(

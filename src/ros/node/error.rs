@@ -4,6 +4,7 @@
 use crate::config::ConfigError;
 use crate::model::urdf::UrdfError;
 use crate::ros::context::ContextError;
+use crate::ros::param_overrides::OverridesError;
 
 /// Why [`super::run`] failed.
 #[derive(Debug, thiserror::Error)]
@@ -18,8 +19,8 @@ pub enum NodeError {
     )]
     SecurityRequested,
     /// A parameters file or `-p` override could not be read.
-    #[error("{0}")]
-    ParameterOverrides(String),
+    #[error(transparent)]
+    ParameterOverrides(#[from] OverridesError),
     /// The parameters do not validate.
     #[error(transparent)]
     Config(#[from] ConfigError),

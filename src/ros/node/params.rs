@@ -27,7 +27,7 @@ pub(super) fn load_parameters(
         .map(ParamSource::File)
         .chain(ros_args.params.iter().cloned())
         .collect();
-    let overrides = ParamOverrides::read(&sources).map_err(NodeError::ParameterOverrides)?;
+    let overrides = ParamOverrides::read(&sources)?;
     for warning in overrides.unmatched_files(fqn) {
         warn!("{warning}");
     }

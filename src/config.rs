@@ -13,7 +13,7 @@ use serde_norway::Value;
 
 use crate::model::CommandAxes;
 use crate::occupancy::UnknownSpace;
-use crate::param_overrides::ParamOverrides;
+use crate::param_overrides::{OverridesError, ParamOverrides};
 pub use crate::parameters::BUILTIN_URDF_PATH;
 use crate::parameters::{self, Value as Typed, PARAMETERS};
 use crate::sampling::{Controls, SamplerKind, CONTROL_SAMPLE_BUDGET_BYTES};
@@ -69,9 +69,16 @@ impl ParameterSet {
     pub fn merge_file(&mut self, path: &Path, node_name: &str) -> Result<(), ConfigError> {
         let source = path.display().to_string();
         let mut table = ParamOverrides::default();
-        table
-            .read_file(path)
-            .map_err(|e| ConfigError::new(&source, e))?;
+        table.read_file(path).map_err(|e| {
+            let problem = match e {
+                OverridesError::Unreadable { source, .. } => {
+                    format!("cannot read the file: {source}")
+                }
+                OverridesError::BadFile { problem, .. } => problem.to_string(),
+                other => other.to_string(),
+            };
+            ConfigError::new(&source, problem)
+        })?;
         let fqn = format!("/{}", node_name.trim_start_matches('/'));
         if !table.unmatched_files(&fqn).is_empty() {
             let bare = node_name.trim_start_matches('/');

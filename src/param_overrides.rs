@@ -60,18 +60,76 @@ pub struct ParamOverrides {
     files: Vec<(PathBuf, Vec<String>)>,
 }
 
+/// Why the parameter overrides could not be read.
+#[derive(Debug, thiserror::Error)]
+pub enum OverridesError {
+    /// A parameters file could not be read.
+    #[error("{}: cannot read the file: {source}", .path.display())]
+    Unreadable {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        source: std::io::Error,
+    },
+    /// A parameters file is not laid out as rcl reads one.
+    #[error("{}: {problem}", .path.display())]
+    BadFile {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong with it.
+        problem: FileError,
+    },
+    /// A `-p name:=value` value is not YAML.
+    #[error("command line: cannot read the value of '{name}': {reason}")]
+    BadValue {
+        /// The parameter.
+        name: String,
+        /// The YAML parser's reason.
+        reason: serde_norway::Error,
+    },
+}
+
+/// What is wrong with a parameters file's layout.
+#[derive(Debug, thiserror::Error)]
+pub enum FileError {
+    /// The text is not YAML.
+    #[error("not valid YAML: {0}")]
+    NotYaml(serde_norway::Error),
+    /// The document is not a mapping.
+    #[error("expected a mapping of node names to `ros__parameters`")]
+    NotMapping,
+    /// A key on the node-name levels is not a string (`key` as YAML debug-prints it).
+    #[error("node name {key} under '{prefix}' is not a string")]
+    NodeNameNotString {
+        /// The key.
+        key: String,
+        /// The node-name levels above it.
+        prefix: String,
+    },
+    /// `ros__parameters` at the top level, with no node name above it.
+    #[error("`ros__parameters` must be under a node name")]
+    ParametersWithoutNode,
+    /// A node's `ros__parameters` is not a mapping (the node's key).
+    #[error("`{0}.ros__parameters` must be a mapping")]
+    ParametersNotMapping(String),
+    /// A node-name level that ends without `ros__parameters` (its key).
+    #[error("node '{0}' has no `ros__parameters` section")]
+    NoParameters(String),
+}
+
 impl ParamOverrides {
     /// Reads `sources` in order; an unreadable or malformed file is an error naming it.
-    pub fn read(sources: &[ParamSource]) -> Result<Self, String> {
+    pub fn read(sources: &[ParamSource]) -> Result<Self, OverridesError> {
         let mut table = Self::default();
         for source in sources {
             match source {
-                ParamSource::File(path) => table
-                    .read_file(path)
-                    .map_err(|e| format!("{}: {e}", path.display()))?,
+                ParamSource::File(path) => table.read_file(path)?,
                 ParamSource::Assignment { node, name, value } => {
-                    let parsed: Value = serde_norway::from_str(value).map_err(|e| {
-                        format!("command line: cannot read the value of '{name}': {e}")
+                    let parsed: Value = serde_norway::from_str(value).map_err(|reason| {
+                        OverridesError::BadValue {
+                            name: name.clone(),
+                            reason,
+                        }
                     })?;
                     table.set(
                         node.as_deref().unwrap_or("/**"),
@@ -89,25 +147,33 @@ impl ParamOverrides {
     }
 
     /// Adds the sections of the parameters file at `path`; an unreadable or malformed file is
-    /// an error (not naming it: the caller does).
-    pub fn read_file(&mut self, path: &Path) -> Result<(), String> {
-        let text = crate::input_file::read_to_string(path)
-            .map_err(|e| format!("cannot read the file: {e}"))?;
-        let keys = self.add_file(&text, path)?;
+    /// an error naming it.
+    pub fn read_file(&mut self, path: &Path) -> Result<(), OverridesError> {
+        let text = crate::input_file::read_to_string(path).map_err(|source| {
+            OverridesError::Unreadable {
+                path: path.to_path_buf(),
+                source,
+            }
+        })?;
+        let keys = self
+            .add_file(&text, path)
+            .map_err(|problem| OverridesError::BadFile {
+                path: path.to_path_buf(),
+                problem,
+            })?;
         self.files.push((path.to_path_buf(), keys));
         Ok(())
     }
 
     /// Adds a parameters file's sections (`path` names it and gives relative paths their base);
     /// returns their keys.
-    fn add_file(&mut self, text: &str, path: &Path) -> Result<Vec<String>, String> {
-        let document: Value =
-            serde_norway::from_str(text).map_err(|e| format!("not valid YAML: {e}"))?;
+    fn add_file(&mut self, text: &str, path: &Path) -> Result<Vec<String>, FileError> {
+        let document: Value = serde_norway::from_str(text).map_err(FileError::NotYaml)?;
         let mut keys = Vec::new();
         match document {
             Value::Null => {} // an empty file, as rcl accepts it
             Value::Mapping(top) => self.add_level(&top, "", path, &mut keys)?,
-            _ => return Err("expected a mapping of node names to `ros__parameters`".into()),
+            _ => return Err(FileError::NotMapping),
         }
         Ok(keys)
     }
@@ -120,17 +186,18 @@ impl ParamOverrides {
         prefix: &str,
         path: &Path,
         keys: &mut Vec<String>,
-    ) -> Result<(), String> {
+    ) -> Result<(), FileError> {
         for (key, value) in level {
-            let key = key
-                .as_str()
-                .ok_or_else(|| format!("node name {key:?} under '{prefix}' is not a string"))?;
+            let key = key.as_str().ok_or_else(|| FileError::NodeNameNotString {
+                key: format!("{key:?}"),
+                prefix: prefix.to_owned(),
+            })?;
             if key == "ros__parameters" {
                 if prefix.is_empty() {
-                    return Err("`ros__parameters` must be under a node name".into());
+                    return Err(FileError::ParametersWithoutNode);
                 }
                 let Value::Mapping(parameters) = value else {
-                    return Err(format!("`{prefix}.ros__parameters` must be a mapping"));
+                    return Err(FileError::ParametersNotMapping(prefix.to_owned()));
                 };
                 keys.push(prefix.to_owned());
                 let mut flat = Vec::new();
@@ -155,7 +222,7 @@ impl ParamOverrides {
             };
             match value {
                 Value::Mapping(inner) => self.add_level(inner, &name, path, keys)?,
-                _ => return Err(format!("node '{name}' has no `ros__parameters` section")),
+                _ => return Err(FileError::NoParameters(name)),
             }
         }
         Ok(())
@@ -381,7 +448,7 @@ drone1:
             ("ros__parameters:\n  a: 1\n", "under a node name"),
             ("n: [\n", "not valid YAML"),
         ] {
-            let e = t.add_file(text, path).unwrap_err();
+            let e = t.add_file(text, path).unwrap_err().to_string();
             assert!(e.contains(part), "{text}: {e}");
         }
         t.add_file("", path).unwrap();

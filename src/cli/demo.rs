@@ -62,7 +62,7 @@ pub fn run(args: DemoArgs) -> Result<(), String> {
         .join()
         .map_err(|_| "the node thread failed".to_owned())?;
     let samples = flown?;
-    node_result?;
+    node_result.map_err(|e| e.to_string())?;
     summarize(&samples);
     if let Some(dir) = args.plot.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
@@ -91,7 +91,7 @@ struct Scored {
 
 /// Flies the drone: publishes odometry and scans at 10 Hz and collects the node's answers.
 fn fly(args: &DemoArgs, stop: &std::sync::atomic::AtomicBool) -> Result<Vec<Scored>, String> {
-    let context = context_from_env(false)?;
+    let context = context_from_env(false).map_err(|e| e.to_string())?;
     let mut node = context
         .new_node(
             NodeName::new("/", "cstep_demo_drone").map_err(|e| format!("{e:?}"))?,

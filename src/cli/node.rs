@@ -34,7 +34,7 @@ pub fn run(args: NodeArgs) -> Result<(), String> {
     if args.exit_with_parent {
         exit_with_parent()?;
     }
-    cstep::ros::node::run(args.config.as_slice(), &ros_args, stop)
+    cstep::ros::node::run(args.config.as_slice(), &ros_args, stop).map_err(|e| e.to_string())
 }
 
 /// Has the kernel send SIGTERM, which stops the node cleanly, when the parent process ends.

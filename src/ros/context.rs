@@ -86,9 +86,31 @@ pub struct Discovery {
     pub warnings: Vec<String>,
 }
 
+/// Why the DDS context could not be set up from the environment.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum ContextError {
+    /// `ROS_DOMAIN_ID` is not a domain rcl accepts; the value as set.
+    #[error("ROS_DOMAIN_ID must be 0–232, got \"{0}\"")]
+    DomainId(String),
+    /// A `ROS_STATIC_PEERS` entry names no IPv4 host.
+    #[error("ROS_STATIC_PEERS: cannot resolve \"{0}\"")]
+    StaticPeer(String),
+    /// RustDDS could not join the domain.
+    #[error("cannot join DDS domain {domain}: {reason}")]
+    JoinDomain {
+        /// The domain.
+        domain: u16,
+        /// RustDDS's reason.
+        reason: String,
+    },
+    /// ros2-client could not build its context on the participant.
+    #[error("ROS context: {0}")]
+    RosContext(String),
+}
+
 impl Discovery {
     /// The settings of this process's environment.
-    pub fn from_env() -> Result<Self, String> {
+    pub fn from_env() -> Result<Self, ContextError> {
         Self::from_vars(|name| std::env::var(name).ok())
     }
 
@@ -98,14 +120,14 @@ impl Discovery {
     /// value warns), and `1` forces `LOCALHOST` with no static peers; `ROS_STATIC_PEERS` splits
     /// on `;`, skips empty entries and, with a warning, entries over 255 bytes, and is not read
     /// in `OFF` range. An invalid `ROS_DOMAIN_ID` is an error naming it.
-    pub fn from_vars(var: impl Fn(&str) -> Option<String>) -> Result<Self, String> {
+    pub fn from_vars(var: impl Fn(&str) -> Option<String>) -> Result<Self, ContextError> {
         let domain_id = match var("ROS_DOMAIN_ID") {
             Some(text) if !text.trim().is_empty() => text
                 .trim()
                 .parse::<u16>()
                 .ok()
                 .filter(|d| *d <= 232)
-                .ok_or_else(|| format!("ROS_DOMAIN_ID must be 0–232, got \"{text}\""))?,
+                .ok_or_else(|| ContextError::DomainId(text.clone()))?,
             _ => 0,
         };
         // rcutils_get_env gives "" for an unset variable; rcl treats the two alike.
@@ -199,7 +221,7 @@ impl Discovery {
 
     /// The static peers' IPv4 addresses, each name resolved to its first one (as rmw_fastrtps
     /// does); a peer that does not resolve is an error naming it.
-    fn peer_addresses(&self) -> Result<Vec<IpAddr>, String> {
+    fn peer_addresses(&self) -> Result<Vec<IpAddr>, ContextError> {
         self.static_peers
             .iter()
             .map(|peer| {
@@ -208,7 +230,7 @@ impl Discovery {
                     .ok()
                     .and_then(|mut found| found.find(|a| a.is_ipv4()))
                     .map(|a| a.ip())
-                    .ok_or_else(|| format!("ROS_STATIC_PEERS: cannot resolve \"{peer}\""))
+                    .ok_or_else(|| ContextError::StaticPeer(peer.clone()))
             })
             .collect()
     }
@@ -217,7 +239,7 @@ impl Discovery {
 /// A ros2-client context on the domain the environment names, reaching as far as it says.
 /// Prints rcl's warnings for the environment, and [`Discovery::describe`]'s line when the range
 /// was left to its default or `always_announce` is set (the node says its reach every time).
-pub fn context_from_env(always_announce: bool) -> Result<Context, String> {
+pub fn context_from_env(always_announce: bool) -> Result<Context, ContextError> {
     if std::env::var_os("ROS_DISTRO").is_none() {
         // ros2-client warns at start-up without it; cstep speaks Jazzy.
         std::env::set_var("ROS_DISTRO", "jazzy");
@@ -234,8 +256,12 @@ pub fn context_from_env(always_announce: bool) -> Result<Context, String> {
         .automatic_discovery_range(discovery.range.dds())
         .with_static_peers(discovery.peer_addresses()?)
         .build()
-        .map_err(|e| format!("cannot join DDS domain {domain}: {e:?}"))?;
-    Context::from_domain_participant(participant).map_err(|e| format!("ROS context: {e:?}"))
+        .map_err(|e| ContextError::JoinDomain {
+            domain,
+            reason: format!("{e:?}"),
+        })?;
+    Context::from_domain_participant(participant)
+        .map_err(|e| ContextError::RosContext(format!("{e:?}")))
 }
 
 /// The absolute form of a topic or service name: relative names live in `namespace`.
@@ -366,14 +392,16 @@ mod tests {
         assert!(d.static_peers.is_empty());
         let d =
             Discovery::from_vars(vars(&[("ROS_STATIC_PEERS", "no.such.host.invalid")])).unwrap();
-        let err = d.peer_addresses().unwrap_err();
+        let err = d.peer_addresses().unwrap_err().to_string();
         assert!(err.contains("no.such.host.invalid"), "{err}");
     }
 
     #[test]
     fn a_bad_domain_id_is_an_error_naming_the_variable_and_value() {
         for bad in ["233", "-1", "seven", "1.5"] {
-            let err = Discovery::from_vars(vars(&[("ROS_DOMAIN_ID", bad)])).unwrap_err();
+            let err = Discovery::from_vars(vars(&[("ROS_DOMAIN_ID", bad)]))
+                .unwrap_err()
+                .to_string();
             assert!(err.contains("ROS_DOMAIN_ID") && err.contains(bad), "{err}");
         }
     }

@@ -212,7 +212,7 @@ pub fn echo(options: &EchoOptions, out: &mut dyn Write) -> Result<(), String> {
         .transpose()?;
     let started = Instant::now();
 
-    let context = context_from_env(false)?;
+    let context = context_from_env(false).map_err(|e| e.to_string())?;
     let node_name = format!("cstep_echo_{}", std::process::id());
     let mut node = context
         .new_node(

@@ -17,6 +17,7 @@
 
 mod clock;
 mod diagnostics;
+mod error;
 mod guard;
 mod params;
 mod ports;
@@ -42,6 +43,7 @@ use crate::estimator::{robot_description, Estimator};
 
 use clock::NodeClock;
 use diagnostics::StatusIdentity;
+pub use error::NodeError;
 use guard::Guard;
 use params::{load_parameters, parameter_options};
 use ports::{Names, Ports};
@@ -53,20 +55,19 @@ use tasks::serve;
 /// DDS domain `ROS_DOMAIN_ID` as far as `ROS_AUTOMATIC_DISCOVERY_RANGE` reaches
 /// ([`super::context`]), and serves. An error if another node already answers under its names
 /// on that domain ([`super::rivals`]): the node then stops within its first seconds.
-pub fn run(config: &[PathBuf], ros_args: &RosArgs, stop: Arc<AtomicBool>) -> Result<(), String> {
+pub fn run(config: &[PathBuf], ros_args: &RosArgs, stop: Arc<AtomicBool>) -> Result<(), NodeError> {
     let node_name = ros_args.node_name(DEFAULT_NODE_NAME);
     let namespace = ros_args.namespace(&node_name);
-    let rosout = logging::init(ros_args, &logging::logger_name(&namespace, &node_name))?;
+    let rosout = logging::init(ros_args, &logging::logger_name(&namespace, &node_name))
+        .map_err(NodeError::Logging)?;
     refuse_security(ros_args)?;
     let fqn = format!("{}/{node_name}", namespace.trim_end_matches('/'));
     let (settings, interface, parameters) = load_parameters(config, ros_args, &fqn)?;
-    let estimator = Estimator::from_settings(&settings).map_err(|e| e.to_string())?;
+    let estimator = Estimator::from_settings(&settings)?;
     let status = StatusIdentity {
         // diagnostic_updater's convention: "<node's fully qualified name>: <task>".
         name: format!("{fqn}: empowerment"),
-        hardware_id: robot_description(&settings)
-            .map_err(|e| e.to_string())?
-            .name,
+        hardware_id: robot_description(&settings)?.name,
     };
     let shared = Arc::new(Shared::new(
         estimator,
@@ -81,10 +82,11 @@ pub fn run(config: &[PathBuf], ros_args: &RosArgs, stop: Arc<AtomicBool>) -> Res
         parameter_options(&shared, &parameters).enable_rosout(ros_args.rosout_logs != Some(false));
     let mut node = context
         .new_node(
-            NodeName::new(&namespace, &node_name).map_err(|e| format!("node name: {e:?}"))?,
+            NodeName::new(&namespace, &node_name)
+                .map_err(|e| NodeError::NodeName(format!("{e:?}")))?,
             options,
         )
-        .map_err(|e| format!("cannot create the node: {e:?}"))?;
+        .map_err(|e| NodeError::CreateNode(format!("{e:?}")))?;
     rosout.attach(node.logging_handle());
     let names = Names::resolve(&interface, ros_args, &node_name, &namespace)?;
     let ports = Ports::open(&mut node, &names)?;
@@ -124,17 +126,19 @@ pub fn run(config: &[PathBuf], ros_args: &RosArgs, stop: Arc<AtomicBool>) -> Res
     };
     let executor = smol::LocalExecutor::new();
     executor
-        .spawn(node.spinner().map_err(|e| format!("{e:?}"))?.spin())
+        .spawn(
+            node.spinner()
+                .map_err(|e| NodeError::Spinner(format!("{e:?}")))?
+                .spin(),
+        )
         .detach();
     let clock = NodeClock::default();
     smol::block_on(executor.run(serve(&shared, &ports, &node, &guard, &status, &clock)));
     shared.stopping.store(true, Ordering::SeqCst);
     shared.arrived.notify_all();
-    worker
-        .join()
-        .map_err(|_| "the scoring thread failed".to_owned())?;
+    worker.join().map_err(|_| NodeError::ScoringThread)?;
     if let Some(refusal) = shared.latest().refusal.take() {
-        return Err(refusal);
+        return Err(NodeError::Rival(refusal));
     }
     info!("cstep node stopped");
     Ok(())
@@ -143,13 +147,9 @@ pub fn run(config: &[PathBuf], ros_args: &RosArgs, stop: Arc<AtomicBool>) -> Res
 /// Refuses `ROS_SECURITY_ENABLE=true`: RustDDS is built here without DDS Security, so the node
 /// would run unencrypted where its user asked for security. Without it an enclave (`-e`) is
 /// unused, as rcl leaves it unused, and the node says so.
-fn refuse_security(ros_args: &RosArgs) -> Result<(), String> {
+fn refuse_security(ros_args: &RosArgs) -> Result<(), NodeError> {
     if std::env::var("ROS_SECURITY_ENABLE").as_deref() == Ok("true") {
-        return Err(
-            "ROS_SECURITY_ENABLE=true, but cstep cannot run secured (its DDS, RustDDS, \
-             is built without DDS Security); refusing to run unsecured"
-                .into(),
-        );
+        return Err(NodeError::SecurityRequested);
     }
     if let Some(enclave) = &ros_args.enclave {
         info!("enclave {enclave} unused: ROS_SECURITY_ENABLE is not true");

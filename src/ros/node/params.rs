@@ -9,6 +9,7 @@ use ros2_client::NodeOptions;
 use tracing::{debug, warn};
 
 use super::shared::Shared;
+use super::NodeError;
 use crate::config::{validate, NodeSettings, ParameterSet, Parameters};
 use crate::param_overrides::{ParamOverrides, ParamSource};
 use crate::parameters::Value;
@@ -20,7 +21,7 @@ pub(super) fn load_parameters(
     config: &[PathBuf],
     ros_args: &RosArgs,
     fqn: &str,
-) -> Result<(crate::config::Settings, NodeSettings, Parameters), String> {
+) -> Result<(crate::config::Settings, NodeSettings, Parameters), NodeError> {
     let sources: Vec<ParamSource> = config
         .iter()
         .cloned()
@@ -41,7 +42,7 @@ pub(super) fn load_parameters(
         );
         set.insert(&o.name, o.value, &o.source, o.base_dir.as_deref());
     }
-    validate(set).map_err(|e| e.to_string())
+    Ok(validate(set)?)
 }
 
 /// Declares every parameter ([`crate::ros::parameters`]); a `safety_coefficient` or

@@ -8,6 +8,7 @@ use ros2_client::dds::rustdds::Topic;
 use ros2_client::qos::{Durability, History, WhenFull};
 use ros2_client::{Name, Node, Publisher, QosProfile, Server, ServiceMapping, ServiceTypeName};
 
+use super::NodeError;
 use crate::config::NodeSettings;
 use crate::ros::args::{NameKind, RosArgs};
 use crate::ros::messages::{
@@ -38,9 +39,13 @@ impl Names {
         args: &RosArgs,
         node: &str,
         namespace: &str,
-    ) -> Result<Self, String> {
-        let topic = |name: &str| args.resolve(name, NameKind::Topic, node, namespace);
-        let service = |name: &str| args.resolve(name, NameKind::Service, node, namespace);
+    ) -> Result<Self, NodeError> {
+        let resolve = |name: &str, kind| {
+            args.resolve(name, kind, node, namespace)
+                .map_err(NodeError::ResolveName)
+        };
+        let topic = |name: &str| resolve(name, NameKind::Topic);
+        let service = |name: &str| resolve(name, NameKind::Service);
         Ok(Self {
             odom: topic(&interface.odom_topic)?,
             scan: topic(&interface.scan_topic)?,
@@ -71,7 +76,7 @@ pub(super) struct Ports {
 }
 
 impl Ports {
-    pub(super) fn open(node: &mut Node, names: &Names) -> Result<Self, String> {
+    pub(super) fn open(node: &mut Node, names: &Names) -> Result<Self, NodeError> {
         let reliable = QosProfile::publisher_default()
             .reliability_reliable(WhenFull::Wait(Duration::from_millis(10)))
             .durability(Durability::Volatile)
@@ -142,19 +147,31 @@ impl Ports {
 }
 
 /// The topic `name` of message type `M` (its ROS type name from [`RosMessage`]), with `qos`.
-fn topic<M: RosMessage>(node: &Node, name: &str, qos: &QosProfile) -> Result<Topic, String> {
-    let parsed = Name::parse(name).map_err(|e| format!("topic name \"{name}\": {e:?}"))?;
+fn topic<M: RosMessage>(node: &Node, name: &str, qos: &QosProfile) -> Result<Topic, NodeError> {
+    let parsed = Name::parse(name).map_err(|e| NodeError::TopicName {
+        name: name.to_owned(),
+        reason: format!("{e:?}"),
+    })?;
     node.create_topic(&parsed, M::type_name(), qos)
-        .map_err(|e| format!("topic {name}: {e:?}"))
+        .map_err(|e| NodeError::Topic {
+            name: name.to_owned(),
+            reason: format!("{e:?}"),
+        })
 }
 
 /// The parsed name `name` of service `S` and its ROS type name (from [`RosService`]).
-fn service<S: RosService>(name: &str) -> Result<(Name, ServiceTypeName), String> {
-    let parsed = Name::parse(name).map_err(|e| format!("service name \"{name}\": {e:?}"))?;
+fn service<S: RosService>(name: &str) -> Result<(Name, ServiceTypeName), NodeError> {
+    let parsed = Name::parse(name).map_err(|e| NodeError::ServiceName {
+        name: name.to_owned(),
+        reason: format!("{e:?}"),
+    })?;
     Ok((parsed, S::type_name()))
 }
 
 /// An error mapper for creating the named entity.
-pub(super) fn failed<E: std::fmt::Debug>(what: &'static str) -> impl FnOnce(E) -> String {
-    move |e| format!("cannot create {what}: {e:?}")
+pub(super) fn failed<E: std::fmt::Debug>(what: &'static str) -> impl FnOnce(E) -> NodeError {
+    move |e| NodeError::Create {
+        what,
+        reason: format!("{e:?}"),
+    }
 }

@@ -1,0 +1,83 @@
+//! Why the node could not start, or stopped: one variant per failure, each printed exactly as
+//! the user has always read it.
+
+use crate::config::ConfigError;
+use crate::model::urdf::UrdfError;
+use crate::param_overrides::OverridesError;
+use crate::ros::context::ContextError;
+
+/// Why [`super::run`] failed.
+#[derive(Debug, thiserror::Error)]
+pub enum NodeError {
+    /// Logging could not be set up (a bad `--log-level`, say).
+    #[error("{0}")]
+    Logging(String),
+    /// `ROS_SECURITY_ENABLE=true`, which this build cannot honour.
+    #[error(
+        "ROS_SECURITY_ENABLE=true, but cstep cannot run secured (its DDS, RustDDS, \
+         is built without DDS Security); refusing to run unsecured"
+    )]
+    SecurityRequested,
+    /// A parameters file or `-p` override could not be read.
+    #[error(transparent)]
+    ParameterOverrides(#[from] OverridesError),
+    /// The parameters do not validate.
+    #[error(transparent)]
+    Config(#[from] ConfigError),
+    /// The robot description cannot be loaded.
+    #[error(transparent)]
+    Robot(#[from] UrdfError),
+    /// The DDS context could not be set up from the environment.
+    #[error(transparent)]
+    Context(#[from] ContextError),
+    /// The node's name or namespace is not a valid ROS name.
+    #[error("node name: {0}")]
+    NodeName(String),
+    /// ros2-client could not create the node.
+    #[error("cannot create the node: {0}")]
+    CreateNode(String),
+    /// A topic or service name does not resolve (`--ros-args` remapping, namespace).
+    #[error("{0}")]
+    ResolveName(String),
+    /// A resolved topic name ros2-client does not accept.
+    #[error("topic name \"{name}\": {reason}")]
+    TopicName {
+        /// The topic name.
+        name: String,
+        /// ros2-client's reason.
+        reason: String,
+    },
+    /// A resolved service name ros2-client does not accept.
+    #[error("service name \"{name}\": {reason}")]
+    ServiceName {
+        /// The service name.
+        name: String,
+        /// ros2-client's reason.
+        reason: String,
+    },
+    /// The DDS topic could not be created.
+    #[error("topic {name}: {reason}")]
+    Topic {
+        /// The topic name.
+        name: String,
+        /// ros2-client's reason.
+        reason: String,
+    },
+    /// A subscription, publisher or server could not be created.
+    #[error("cannot create {what}: {reason}")]
+    Create {
+        /// What, e.g. "the odometry subscription".
+        what: &'static str,
+        /// ros2-client's reason.
+        reason: String,
+    },
+    /// The DDS spinner could not be started.
+    #[error("{0}")]
+    Spinner(String),
+    /// The scoring thread panicked.
+    #[error("the scoring thread failed")]
+    ScoringThread,
+    /// Another node answers under this node's names ([`crate::ros::rivals`]).
+    #[error("{0}")]
+    Rival(String),
+}

@@ -5,8 +5,9 @@ Arguments (``ros2 launch cstep cstep.launch.py --show-args`` lists them):
 - ``namespace``: the node's namespace; its outputs follow it (``/drone1/cstep/empowerment``).
 - ``use_sim_time``: take time from ``/clock``.
 - ``params_file``: the parameters file; default: the installed ``share/cstep/config/cstep.yaml``.
-- ``robot_description``: the robot's URDF file (the node reads its dynamics from it); default:
-  the installed ``share/cstep/urdf/cf2x.urdf`` (Crazyflie 2.x).
+- ``robot_description``: the robot's URDF file, or the URDF text itself as
+  ``robot_state_publisher`` takes it (the node reads its dynamics from it); default: the
+  installed ``share/cstep/urdf/cf2x.urdf`` (Crazyflie 2.x).
 - ``log_level``: the node's log level (debug, info, warn, error, fatal).
 
 The command line this produces is written down, from launch_ros's source, in

@@ -239,7 +239,7 @@ pub fn flatten(prefix: &str, mapping: &serde_norway::Mapping, out: &mut Vec<(Str
 fn resolve_path(value: Value, base_dir: Option<&Path>) -> Value {
     match (&value, base_dir) {
         (Value::String(s), Some(dir))
-            if Path::new(s).is_relative() && !s.starts_with("builtin:") =>
+            if Path::new(s).is_relative() && !s.starts_with("builtin:") && !is_urdf_text(s) =>
         {
             Value::String(dir.join(s).display().to_string())
         }
@@ -280,6 +280,15 @@ pub enum RobotSource {
     Builtin,
     /// A URDF file.
     File(PathBuf),
+    /// URDF text given in the parameter itself, as ROS launch files pass `robot_description`
+    /// to `robot_state_publisher` (often xacro's output).
+    Text(String),
+}
+
+/// Whether a `robot_description` value is URDF text rather than a path: XML starts with `<`,
+/// which no path a user means does.
+pub fn is_urdf_text(value: &str) -> bool {
+    value.trim_start().starts_with('<')
 }
 
 /// Everything an evaluation needs, validated.
@@ -338,6 +347,7 @@ impl Settings {
     pub fn from_parameters(p: &Parameters) -> Result<Self, ConfigError> {
         let robot_description = match p.text("robot_description") {
             BUILTIN_URDF_PATH => RobotSource::Builtin,
+            xml if is_urdf_text(xml) => RobotSource::Text(xml.to_owned()),
             path => RobotSource::File(PathBuf::from(path)),
         };
         let count = |name: &str| {
@@ -494,6 +504,7 @@ pub fn validate(set: ParameterSet) -> Result<(Settings, NodeSettings, Parameters
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::model::urdf::RobotDescription;
 
     fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
         let path = dir.join(name);
@@ -525,6 +536,44 @@ mod tests {
             panic!()
         };
         assert!(urdf.exists(), "{}", urdf.display());
+    }
+
+    #[test]
+    fn urdf_text_in_robot_description_is_the_robot_not_a_path() {
+        // launch files pass robot_description as the URDF text (launch_ros writes it into a
+        // parameters file as a YAML string); it must not be taken for a relative path.
+        let urdf_path = Path::new(env!("CARGO_MANIFEST_DIR")).join("urdf/cf2x.urdf");
+        let urdf = std::fs::read_to_string(&urdf_path).unwrap();
+        let dir = temp_dir("urdf-text");
+        let file: BTreeMap<&str, BTreeMap<&str, BTreeMap<&str, &str>>> = BTreeMap::from([(
+            "/**",
+            BTreeMap::from([(
+                "ros__parameters",
+                BTreeMap::from([("robot_description", urdf.as_str())]),
+            )]),
+        )]);
+        let path = write(&dir, "p.yaml", &serde_norway::to_string(&file).unwrap());
+        let s = Settings::load(Some(&path), DEFAULT_NODE_NAME, &[]).unwrap();
+        assert_eq!(s.robot_description, RobotSource::Text(urdf));
+        let from_text = crate::estimator::robot_description(&s).unwrap();
+        let from_file = RobotDescription::load(&urdf_path).unwrap();
+        assert_eq!(
+            RobotDescription {
+                source: from_file.source.clone(),
+                ..from_text
+            },
+            from_file
+        );
+        let broken = write(
+            &dir,
+            "broken.yaml",
+            "/**:\n  ros__parameters:\n    robot_description: \"<robot name='x'>\"\n",
+        );
+        let s = Settings::load(Some(&broken), DEFAULT_NODE_NAME, &[]).unwrap();
+        let error = crate::estimator::robot_description(&s)
+            .unwrap_err()
+            .to_string();
+        assert!(error.contains("robot_description (URDF text)"), "{error}");
     }
 
     #[test]

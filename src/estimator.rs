@@ -126,11 +126,13 @@ pub struct Estimator {
     controls: Mutex<Option<(u64, Arc<Controls>)>>,
 }
 
-/// The robot description the configuration names (the built-in Crazyflie or a URDF file).
+/// The robot description the configuration names (the built-in Crazyflie, a URDF file, or
+/// URDF text).
 pub fn robot_description(settings: &Settings) -> Result<RobotDescription, UrdfError> {
     match &settings.robot_description {
         RobotSource::Builtin => RobotDescription::from_str(BUILTIN_URDF, "built-in cf2x.urdf"),
         RobotSource::File(path) => RobotDescription::load(path),
+        RobotSource::Text(xml) => RobotDescription::from_str(xml, "robot_description (URDF text)"),
     }
 }
 

@@ -96,7 +96,9 @@ impl Rule {
             Rule::OptionalFinite => "finite, or .nan: unset".into(),
             Rule::Choice(words) => words.join(" | "),
             Rule::RosName => "a ROS name, no spaces".into(),
-            Rule::Path => "a file path (relative to the parameters file) or builtin:NAME".into(),
+            Rule::Path => {
+                "a file path (relative to the parameters file), builtin:NAME, or URDF text".into()
+            }
         }
     }
 }
@@ -144,8 +146,9 @@ pub const PARAMETERS: &[Parameter] = &[
         default: BUILTIN_URDF_PATH,
         unit: None,
         description: "The robot: a URDF with a <properties> element (arm, kf, km, \
-            thrust2weight, ...). builtin:cf2x.urdf is the compiled-in Crazyflie 2.x, the file \
-            urdf/cf2x.urdf.",
+            thrust2weight, ...), as a file path or as the URDF text itself (as launch files \
+            pass robot_description to robot_state_publisher). builtin:cf2x.urdf is the \
+            compiled-in Crazyflie 2.x, the file urdf/cf2x.urdf.",
         change: Change::ReadOnly,
     },
     Parameter {

@@ -29,7 +29,7 @@ pub struct NodeArgs {
 
 /// Runs `cstep node` until Ctrl-C.
 pub fn run(args: NodeArgs) -> Result<(), String> {
-    let ros_args = RosArgs::parse(&args.ros_args)?;
+    let ros_args = RosArgs::parse(&args.ros_args).map_err(|e| e.to_string())?;
     let stop = stop_on_ctrl_c()?;
     if args.exit_with_parent {
         exit_with_parent()?;

@@ -121,16 +121,159 @@ impl LogLevel {
     }
 }
 
-/// The error for a malformed `flag value`, in rcl's words.
-fn bad(what: &str, flag: &str, value: &str, why: &str) -> String {
-    format!("--ros-args: couldn't parse {what}: '{flag} {value}': {why}")
+/// Why a `--ros-args` command line cannot be read: one line each, in rcl's words where rcl has
+/// words for it.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum ArgsError {
+    /// An argument outside the `--ros-args` blocks (`cstep node` takes no others).
+    #[error("unexpected argument \"{0}\" (ROS arguments follow --ros-args)")]
+    Unexpected(String),
+    /// A flag at the end of the line, without its value.
+    #[error("--ros-args: {flag} needs {what}")]
+    MissingValue {
+        /// The flag, as written (`-p`, `--params-file`, ...).
+        flag: String,
+        /// What it needs, e.g. "a file path".
+        what: &'static str,
+    },
+    /// A flag rcl does not know (rclcpp and rclpy refuse it too).
+    #[error("--ros-args: unknown ROS argument \"{0}\"")]
+    UnknownFlag(String),
+    /// A malformed `-p`, `-r` or `--log-level` value.
+    #[error("--ros-args: couldn't parse {}: '{flag} {value}': {reason}", reason.what())]
+    Rule {
+        /// The flag, as written.
+        flag: String,
+        /// Its value, as written.
+        value: String,
+        /// What is wrong with the value.
+        reason: RuleError,
+    },
+}
+
+/// What is wrong with the value of a `-p`, `-r` or `--log-level` flag.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum RuleError {
+    /// A `-p` rule without `:=`.
+    #[error("expected [node:]name:=value")]
+    ParamForm,
+    /// A `-p` rule with `*` in the name, which rcl does not implement either.
+    #[error("wildcards in parameter names are not implemented (nor in rcl)")]
+    ParamWildcard,
+    /// A `-p` parameter name that is not tokens joined by `.` or `/`.
+    #[error("invalid parameter name \"{0}\"")]
+    ParamName(String),
+    /// A `-r` rule without `:=`.
+    #[error("expected [node:]from:=to")]
+    RemapForm,
+    /// `__node:=` something that is not a node name.
+    #[error("node name not remapped to invalid name \"{0}\"")]
+    NodeName(String),
+    /// `__ns:=` something that is not a fully qualified namespace.
+    #[error("namespace not remapped to a fully qualified name (found: \"{0}\")")]
+    Namespace(String),
+    /// `*` or `**` in a remap rule, which cstep does not implement.
+    #[error("wildcards ('*', '**') in a {0} are not implemented")]
+    RemapWildcard(Side),
+    /// `\1`-style backreferences in a remap rule, which cstep does not implement.
+    #[error("backreferences are not implemented")]
+    Backreference,
+    /// One side of a remap rule is not a topic or service name.
+    #[error("{side} \"{name}\": {reason}")]
+    Name {
+        /// Which side.
+        side: Side,
+        /// The name, as written.
+        name: String,
+        /// What is wrong with it.
+        reason: InvalidName,
+    },
+    /// A `--log-level` level that is not one of rcutils' six.
+    #[error("not one of unset, debug, info, warn, error, fatal")]
+    LogLevel,
+    /// `--log-level :=LEVEL`.
+    #[error("the logger name is empty")]
+    EmptyLoggerName,
+}
+
+impl RuleError {
+    /// What kind of rule it is wrong for, as rcl's message names it.
+    fn what(&self) -> &'static str {
+        match self {
+            RuleError::ParamForm | RuleError::ParamWildcard | RuleError::ParamName(_) => {
+                "parameter override rule"
+            }
+            RuleError::RemapForm
+            | RuleError::NodeName(_)
+            | RuleError::Namespace(_)
+            | RuleError::RemapWildcard(_)
+            | RuleError::Backreference
+            | RuleError::Name { .. } => "remap rule",
+            RuleError::LogLevel | RuleError::EmptyLoggerName => "log level",
+        }
+    }
+}
+
+/// A side of a remap rule `from:=to`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Side {
+    /// `from`: the name matched.
+    Match,
+    /// `to`: the name it becomes.
+    Replacement,
+}
+
+impl std::fmt::Display for Side {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Side::Match => "match",
+            Side::Replacement => "replacement",
+        })
+    }
+}
+
+/// Why a topic or service name, as written in a remap rule, is not one.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum InvalidName {
+    /// Nothing but the `/` or `~/` prefix.
+    #[error("empty name")]
+    Empty,
+    /// A part between `/` that is not a token (or a `{substitution}`).
+    #[error("\"{0}\" is not a name token (letters, digits, _)")]
+    Token(String),
+}
+
+/// A topic or service name that does not resolve to a valid fully qualified ROS name.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum NameError {
+    /// The name does not expand to a valid name ([`expand`]).
+    #[error("\"{name}\" does not expand to a valid ROS name (got \"{expanded}\")")]
+    Expansion {
+        /// The name, as written.
+        name: String,
+        /// What it expanded to.
+        expanded: String,
+    },
+    /// The replacement of the remap rule that matched the name does not expand to a valid
+    /// name.
+    #[error(
+        "remap rule {from}:={to}: \"{to}\" does not expand to a valid ROS name (got \"{expanded}\")"
+    )]
+    Replacement {
+        /// The rule's match, as written.
+        from: String,
+        /// The rule's replacement, as written.
+        to: String,
+        /// What the replacement expanded to.
+        expanded: String,
+    },
 }
 
 impl RosArgs {
     /// Parses a command line's ROS arguments: those after each `--ros-args`, up to `--` or the
     /// end (a further `--ros-args` starts another block). Arguments outside the blocks are not
     /// ROS arguments and are errors here, as `cstep node` takes no others.
-    pub fn parse(args: &[String]) -> Result<Self, String> {
+    pub fn parse(args: &[String]) -> Result<Self, ArgsError> {
         let mut parsed = Self::default();
         let mut in_block = false;
         let mut it = args.iter();
@@ -141,33 +284,35 @@ impl RosArgs {
                 continue;
             }
             if !in_block {
-                return Err(format!(
-                    "unexpected argument \"{arg}\" (ROS arguments follow --ros-args)"
-                ));
+                return Err(ArgsError::Unexpected(arg.to_owned()));
             }
             if arg == "--" {
                 in_block = false;
                 continue;
             }
-            let mut value = |what: &str| {
-                it.next()
-                    .cloned()
-                    .ok_or_else(|| format!("--ros-args: {arg} needs {what}"))
+            let mut value = |what: &'static str| {
+                it.next().cloned().ok_or_else(|| ArgsError::MissingValue {
+                    flag: arg.to_owned(),
+                    what,
+                })
+            };
+            let bad = |value: &str, reason| ArgsError::Rule {
+                flag: arg.to_owned(),
+                value: value.to_owned(),
+                reason,
             };
             match arg {
                 "-p" | "--param" => {
                     let rule = value("a parameter rule, [node:]name:=value")?;
-                    parsed.params.push(
-                        parse_param_rule(&rule)
-                            .map_err(|why| bad("parameter override rule", arg, &rule, &why))?,
-                    );
+                    parsed
+                        .params
+                        .push(parse_param_rule(&rule).map_err(|why| bad(&rule, why))?);
                 }
                 "-r" | "--remap" => {
                     let rule = value("a remap rule, [node:]from:=to")?;
-                    parsed.remaps.push(
-                        parse_remap_rule(&rule)
-                            .map_err(|why| bad("remap rule", arg, &rule, &why))?,
-                    );
+                    parsed
+                        .remaps
+                        .push(parse_remap_rule(&rule).map_err(|why| bad(&rule, why))?);
                 }
                 "--params-file" => {
                     parsed
@@ -177,19 +322,10 @@ impl RosArgs {
                 "--log-level" => {
                     let rule = value("a level, LEVEL or logger:=LEVEL")?;
                     let level = |text: &str| {
-                        LogLevel::parse(text).ok_or_else(|| {
-                            bad(
-                                "log level",
-                                arg,
-                                &rule,
-                                "not one of unset, debug, info, warn, error, fatal",
-                            )
-                        })
+                        LogLevel::parse(text).ok_or_else(|| bad(&rule, RuleError::LogLevel))
                     };
                     match rule.split_once(":=") {
-                        Some(("", _)) => {
-                            return Err(bad("log level", arg, &rule, "the logger name is empty"))
-                        }
+                        Some(("", _)) => return Err(bad(&rule, RuleError::EmptyLoggerName)),
                         Some((logger, text)) => {
                             parsed.logger_levels.push((logger.to_owned(), level(text)?))
                         }
@@ -207,7 +343,7 @@ impl RosArgs {
                 "--disable-stdout-logs" => parsed.stdout_logs = Some(false),
                 "--enable-external-lib-logs" => parsed.external_lib_logs = Some(true),
                 "--disable-external-lib-logs" => parsed.external_lib_logs = Some(false),
-                other => return Err(format!("--ros-args: unknown ROS argument \"{other}\"")),
+                other => return Err(ArgsError::UnknownFlag(other.to_owned())),
             }
         }
         Ok(parsed)
@@ -248,7 +384,7 @@ impl RosArgs {
         kind: NameKind,
         node: &str,
         namespace: &str,
-    ) -> Result<String, String> {
+    ) -> Result<String, NameError> {
         let expanded = expand(name, node, namespace)?;
         for rule in self.remaps.iter().filter(|rule| rule.applies_to(node)) {
             let Remap::Name {
@@ -266,8 +402,16 @@ impl RosArgs {
                     | (NameKinds::Services, NameKind::Service)
             );
             if kind_matches && expand(from, node, namespace)? == expanded {
-                return expand(to, node, namespace)
-                    .map_err(|e| format!("remap rule {from}:={to}: {e}"));
+                let replaced = substitute(to, node, namespace);
+                return if is_full_name(&replaced) {
+                    Ok(replaced)
+                } else {
+                    Err(NameError::Replacement {
+                        from: from.clone(),
+                        to: to.clone(),
+                        expanded: replaced,
+                    })
+                };
             }
         }
         Ok(expanded)
@@ -303,18 +447,18 @@ fn node_prefix(rule: &str) -> (Option<String>, &str) {
 
 /// `[node:]name:=yaml value` (`arguments.c`, `_rcl_parse_param_rule`): the name is tokens
 /// joined by `.` or `/`; a rule without a node is for every node (`/**`).
-fn parse_param_rule(rule: &str) -> Result<ParamSource, String> {
+fn parse_param_rule(rule: &str) -> Result<ParamSource, RuleError> {
     let (node, rest) = node_prefix(rule);
-    let (name, value) = rest.split_once(":=").ok_or("expected [node:]name:=value")?;
+    let (name, value) = rest.split_once(":=").ok_or(RuleError::ParamForm)?;
     if name.contains('*') {
-        return Err("wildcards in parameter names are not implemented (nor in rcl)".into());
+        return Err(RuleError::ParamWildcard);
     }
     let valid = name
         .split(['.', '/'])
         .all(|part| is_token(part) || part.is_empty())
         && name.split('.').all(|part| !part.is_empty());
     if !valid || name.is_empty() {
-        return Err(format!("invalid parameter name \"{name}\""));
+        return Err(RuleError::ParamName(name.to_owned()));
     }
     Ok(ParamSource::Assignment {
         node,
@@ -325,13 +469,13 @@ fn parse_param_rule(rule: &str) -> Result<ParamSource, String> {
 
 /// `[node:]__node:=name`, `[node:]__ns:=/ns` or `[node:][rostopic://|rosservice://]from:=to`
 /// (`arguments.c`, `_rcl_parse_remap_begin_remap_rule`).
-fn parse_remap_rule(rule: &str) -> Result<RemapRule, String> {
+fn parse_remap_rule(rule: &str) -> Result<RemapRule, RuleError> {
     let (node, rest) = node_prefix(rule);
-    let (from, to) = rest.split_once(":=").ok_or("expected [node:]from:=to")?;
+    let (from, to) = rest.split_once(":=").ok_or(RuleError::RemapForm)?;
     let kind = match from {
         "__node" | "__name" => {
             if !is_token(to) || to.starts_with(|c: char| c.is_ascii_digit()) {
-                return Err(format!("node name not remapped to invalid name \"{to}\""));
+                return Err(RuleError::NodeName(to.to_owned()));
             }
             Remap::NodeName(to.to_owned())
         }
@@ -347,16 +491,18 @@ fn parse_remap_rule(rule: &str) -> Result<RemapRule, String> {
             } else {
                 (NameKinds::Both, from)
             };
-            for (side, name) in [("match", from), ("replacement", to)] {
+            for (side, name) in [(Side::Match, from), (Side::Replacement, to)] {
                 if name.contains('*') {
-                    return Err(format!(
-                        "wildcards ('*', '**') in a {side} are not implemented"
-                    ));
+                    return Err(RuleError::RemapWildcard(side));
                 }
                 if name.contains('\\') {
-                    return Err("backreferences are not implemented".into());
+                    return Err(RuleError::Backreference);
                 }
-                check_name_syntax(name).map_err(|e| format!("{side} \"{name}\": {e}"))?;
+                check_name_syntax(name).map_err(|reason| RuleError::Name {
+                    side,
+                    name: name.to_owned(),
+                    reason,
+                })?;
             }
             Remap::Name {
                 applies_to,
@@ -369,7 +515,7 @@ fn parse_remap_rule(rule: &str) -> Result<RemapRule, String> {
 }
 
 /// A namespace for `__ns`: fully qualified (`/`, or `/token/token…` without a trailing `/`).
-fn validate_namespace(ns: &str) -> Result<(), String> {
+fn validate_namespace(ns: &str) -> Result<(), RuleError> {
     let valid = ns == "/"
         || (ns.starts_with('/')
             && ns[1..]
@@ -378,15 +524,13 @@ fn validate_namespace(ns: &str) -> Result<(), String> {
     if valid {
         Ok(())
     } else {
-        Err(format!(
-            "namespace not remapped to a fully qualified name (found: \"{ns}\")"
-        ))
+        Err(RuleError::Namespace(ns.to_owned()))
     }
 }
 
 /// A topic or service name as written: optional `/` or `~/` (or just `~`), then tokens
 /// (possibly `{substitutions}`) separated by single `/`.
-fn check_name_syntax(name: &str) -> Result<(), String> {
+fn check_name_syntax(name: &str) -> Result<(), InvalidName> {
     let body = name
         .strip_prefix("~/")
         .or_else(|| name.strip_prefix('/'))
@@ -395,14 +539,12 @@ fn check_name_syntax(name: &str) -> Result<(), String> {
         return Ok(());
     }
     if body.is_empty() {
-        return Err("empty name".into());
+        return Err(InvalidName::Empty);
     }
     for token in body.split('/') {
         let bare = token.trim_start_matches('{').trim_end_matches('}');
         if !is_token(bare) {
-            return Err(format!(
-                "\"{token}\" is not a name token (letters, digits, _)"
-            ));
+            return Err(InvalidName::Token(token.to_owned()));
         }
     }
     Ok(())
@@ -411,14 +553,27 @@ fn check_name_syntax(name: &str) -> Result<(), String> {
 /// rcl's `rcl_expand_topic_name`: `~` is the node's private namespace (`/ns/node`), `{node}`,
 /// `{ns}` and `{namespace}` are substituted, a relative name is put in `namespace`; the result
 /// is a valid fully qualified name (`rmw_validate_full_topic_name`) or an error saying why.
-pub fn expand(name: &str, node: &str, namespace: &str) -> Result<String, String> {
+pub fn expand(name: &str, node: &str, namespace: &str) -> Result<String, NameError> {
+    let expanded = substitute(name, node, namespace);
+    if is_full_name(&expanded) {
+        Ok(expanded)
+    } else {
+        Err(NameError::Expansion {
+            name: name.to_owned(),
+            expanded,
+        })
+    }
+}
+
+/// `name` expanded as [`expand`] expands it, valid or not.
+fn substitute(name: &str, node: &str, namespace: &str) -> String {
     let ns = namespace.trim_end_matches('/');
     let private = format!("{ns}/{node}");
     let substituted = name
         .replace("{node}", node)
         .replace("{namespace}", ns)
         .replace("{ns}", ns);
-    let expanded = if substituted == "~" {
+    if substituted == "~" {
         private
     } else if let Some(rest) = substituted.strip_prefix("~/") {
         format!("{private}/{rest}")
@@ -426,19 +581,17 @@ pub fn expand(name: &str, node: &str, namespace: &str) -> Result<String, String>
         substituted
     } else {
         format!("{ns}/{substituted}")
-    };
-    let valid = expanded.len() > 1
+    }
+}
+
+/// Whether an expanded name is a valid fully qualified name: after its leading `/`, tokens that
+/// do not start with a digit, separated by single `/`.
+fn is_full_name(expanded: &str) -> bool {
+    expanded.len() > 1
         && !expanded.ends_with('/')
         && expanded[1..]
             .split('/')
-            .all(|token| is_token(token) && !token.starts_with(|c: char| c.is_ascii_digit()));
-    if valid {
-        Ok(expanded)
-    } else {
-        Err(format!(
-            "\"{name}\" does not expand to a valid ROS name (got \"{expanded}\")"
-        ))
-    }
+            .all(|token| is_token(token) && !token.starts_with(|c: char| c.is_ascii_digit()))
 }
 
 #[cfg(test)]
@@ -454,7 +607,7 @@ mod tests {
     }
 
     fn error(line: &str) -> String {
-        let e = RosArgs::parse(&args(line)).unwrap_err();
+        let e = RosArgs::parse(&args(line)).unwrap_err().to_string();
         assert!(!e.contains('\n'), "{e}");
         e
     }
@@ -542,7 +695,7 @@ mod tests {
             assert_eq!(expand(name, "cstep_node", ns).unwrap(), expected, "{name}");
         }
         for bad in ["a//b", "/", "a/", "1scan", "sc an", "/x/2y"] {
-            let e = expand(bad, "cstep_node", "/").unwrap_err();
+            let e = expand(bad, "cstep_node", "/").unwrap_err().to_string();
             assert!(e.contains("valid ROS name"), "{e}");
         }
     }
@@ -609,5 +762,63 @@ mod tests {
             let e = error(line);
             assert!(e.contains(part), "{line}: {e}");
         }
+    }
+
+    #[test]
+    fn each_malformed_rule_is_its_own_variant_with_rcls_words() {
+        let rule = |line: &str| match RosArgs::parse(&args(line)) {
+            Err(ArgsError::Rule { reason, .. }) => reason,
+            other => panic!("{line}: {other:?}"),
+        };
+        assert_eq!(rule("--ros-args -p seed"), RuleError::ParamForm);
+        assert_eq!(
+            rule("--ros-args -r __ns:=drone1"),
+            RuleError::Namespace("drone1".into())
+        );
+        assert_eq!(
+            rule("--ros-args -r scan:=a//b"),
+            RuleError::Name {
+                side: Side::Replacement,
+                name: "a//b".into(),
+                reason: InvalidName::Token(String::new()),
+            }
+        );
+        assert_eq!(
+            RosArgs::parse(&args("--ros-args --log-level loud"))
+                .unwrap_err()
+                .to_string(),
+            "--ros-args: couldn't parse log level: '--log-level loud': \
+             not one of unset, debug, info, warn, error, fatal"
+        );
+        assert_eq!(
+            RosArgs::parse(&args("--ros-args -e")),
+            Err(ArgsError::MissingValue {
+                flag: "-e".into(),
+                what: "an enclave name"
+            })
+        );
+    }
+
+    #[test]
+    fn a_replacement_that_does_not_expand_names_its_rule() {
+        let parsed = parse("--ros-args -r odom:=1abc");
+        let e = parsed
+            .resolve("odom", NameKind::Topic, "cstep_node", "/")
+            .unwrap_err();
+        assert_eq!(
+            e,
+            NameError::Replacement {
+                from: "odom".into(),
+                to: "1abc".into(),
+                expanded: "/1abc".into()
+            }
+        );
+        assert_eq!(
+            e.to_string(),
+            format!(
+                "remap rule odom:=1abc: {}",
+                expand("1abc", "cstep_node", "/").unwrap_err()
+            )
+        );
     }
 }

@@ -4,6 +4,7 @@
 use crate::config::ConfigError;
 use crate::model::urdf::UrdfError;
 use crate::param_overrides::OverridesError;
+use crate::ros::args::NameError;
 use crate::ros::context::ContextError;
 
 /// Why [`super::run`] failed.
@@ -37,8 +38,8 @@ pub enum NodeError {
     #[error("cannot create the node: {0}")]
     CreateNode(String),
     /// A topic or service name does not resolve (`--ros-args` remapping, namespace).
-    #[error("{0}")]
-    ResolveName(String),
+    #[error(transparent)]
+    ResolveName(#[from] NameError),
     /// A resolved topic name ros2-client does not accept.
     #[error("topic name \"{name}\": {reason}")]
     TopicName {

@@ -42,7 +42,7 @@ impl Names {
     ) -> Result<Self, NodeError> {
         let resolve = |name: &str, kind| {
             args.resolve(name, kind, node, namespace)
-                .map_err(NodeError::ResolveName)
+                .map_err(NodeError::from)
         };
         let topic = |name: &str| resolve(name, NameKind::Topic);
         let service = |name: &str| resolve(name, NameKind::Service);

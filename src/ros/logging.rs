@@ -153,11 +153,19 @@ impl Rosout {
     }
 }
 
+/// Why the log could not be started.
+#[derive(Debug, thiserror::Error)]
+pub enum LoggingError {
+    /// A log was already started in this process (`tracing` has one global subscriber).
+    #[error("cannot start the log: {0}")]
+    AlreadyStarted(tracing::subscriber::SetGlobalDefaultError),
+}
+
 /// Starts the log for the node's logger `logger` as `args` ask — the console unless
 /// `--disable-stdout-logs`, `/rosout` (through the returned [`Rosout`], once attached) unless
 /// `--disable-rosout-logs` — then says which logging arguments cstep cannot honour. Errors if a
 /// log was already started in this process.
-pub fn init(args: &RosArgs, logger: &str) -> Result<Rosout, String> {
+pub fn init(args: &RosArgs, logger: &str) -> Result<Rosout, LoggingError> {
     let writer = if std::env::var("RCUTILS_LOGGING_USE_STDOUT").as_deref() == Ok("1") {
         BoxMakeWriter::new(std::io::stdout)
     } else {
@@ -178,8 +186,7 @@ pub fn init(args: &RosArgs, logger: &str) -> Result<Rosout, String> {
         .with(console)
         .with(topic)
         .with(Targets::new().with_target("cstep", filter(level_of(args, logger))));
-    tracing::subscriber::set_global_default(subscriber)
-        .map_err(|e| format!("cannot start the log: {e}"))?;
+    tracing::subscriber::set_global_default(subscriber).map_err(LoggingError::AlreadyStarted)?;
     if let Some(file) = &args.log_config_file {
         tracing::warn!(
             "--log-config-file {} ignored: cstep logs to the console and /rosout only",

@@ -6,13 +6,14 @@ use crate::model::urdf::UrdfError;
 use crate::param_overrides::OverridesError;
 use crate::ros::args::NameError;
 use crate::ros::context::ContextError;
+use crate::ros::logging::LoggingError;
 
 /// Why [`super::run`] failed.
 #[derive(Debug, thiserror::Error)]
 pub enum NodeError {
-    /// Logging could not be set up (a bad `--log-level`, say).
-    #[error("{0}")]
-    Logging(String),
+    /// Logging could not be set up (a log already started in this process).
+    #[error(transparent)]
+    Logging(#[from] LoggingError),
     /// `ROS_SECURITY_ENABLE=true`, which this build cannot honour.
     #[error(
         "ROS_SECURITY_ENABLE=true, but cstep cannot run secured (its DDS, RustDDS, \

@@ -58,8 +58,7 @@ use tasks::serve;
 pub fn run(config: &[PathBuf], ros_args: &RosArgs, stop: Arc<AtomicBool>) -> Result<(), NodeError> {
     let node_name = ros_args.node_name(DEFAULT_NODE_NAME);
     let namespace = ros_args.namespace(&node_name);
-    let rosout = logging::init(ros_args, &logging::logger_name(&namespace, &node_name))
-        .map_err(NodeError::Logging)?;
+    let rosout = logging::init(ros_args, &logging::logger_name(&namespace, &node_name))?;
     refuse_security(ros_args)?;
     let fqn = format!("{}/{node_name}", namespace.trim_end_matches('/'));
     let (settings, interface, parameters) = load_parameters(config, ros_args, &fqn)?;

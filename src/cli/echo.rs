@@ -42,5 +42,5 @@ pub fn run(args: EchoArgs) -> Result<(), String> {
         count: if args.once { Some(1) } else { args.count },
         timeout: args.timeout,
     };
-    echo(&options, &mut std::io::stdout().lock())
+    echo(&options, &mut std::io::stdout().lock()).map_err(|e| e.to_string())
 }

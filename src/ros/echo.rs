@@ -20,12 +20,12 @@ use ros2_client::QosProfile;
 use ros2_client::{Context, Message, MessageTypeName, Name, Node, NodeName, NodeOptions};
 use serde::Serialize;
 
-use super::context::{context_from_env, resolve};
+use super::context::{context_from_env, resolve, ContextError};
 use super::messages::{
     DiagnosticArray, EmpoweredReward, Empowerment, LaserScan, MarkerArray, Odometry, PoseStamped,
     RosMessage,
 };
-use super::yaml::to_yaml;
+use super::yaml::{self, to_yaml};
 
 /// How long to look for a publisher when neither `--type` nor the topic's name tells the type
 /// (discovery usually takes 1–2 s); `--timeout` shortens it.
@@ -43,6 +43,141 @@ pub struct EchoOptions {
     /// Give up after this long: an error unless `count` messages (or, without a count, at
     /// least one) arrived.
     pub timeout: Option<Duration>,
+}
+
+/// Why `cstep echo` could not print a topic: one line each, naming the topic or type.
+#[derive(Debug, thiserror::Error)]
+pub enum EchoError {
+    /// `count` is 0.
+    #[error("--count must be at least 1")]
+    ZeroCount,
+    /// The topic is not a valid ROS name.
+    #[error("topic name \"{topic}\" is not a valid ROS name ({reason})")]
+    TopicName {
+        /// The topic, as given.
+        topic: String,
+        /// ros2-client's reason.
+        reason: String,
+    },
+    /// `--type` names no type cstep can print.
+    #[error(transparent)]
+    Type(#[from] EchoTypeError),
+    /// The DDS context could not be set up from the environment.
+    #[error(transparent)]
+    Context(#[from] ContextError),
+    /// The echo node's name is not a valid ROS name.
+    #[error("node name: {0}")]
+    NodeName(String),
+    /// ros2-client could not create the echo node.
+    #[error("cannot create the echo node: {0}")]
+    CreateNode(String),
+    /// No `--type`, not one of cstep's topics, and no publisher found within `waited`.
+    #[error(
+        "cannot tell the type of {topic}: no publisher found within {:.0} s and it is not one of \
+         cstep's topics; pass --type pkg/msg/Name (one of {})",
+        waited.as_secs_f64(),
+        EchoType::known_list()
+    )]
+    NoPublisher {
+        /// The topic.
+        topic: String,
+        /// How long discovery was given.
+        waited: Duration,
+    },
+    /// The topic's publishers publish a type cstep cannot print.
+    #[error(
+        "{topic} carries {type_name}, which cstep echo cannot decode (it knows {})",
+        EchoType::known_list()
+    )]
+    Undecodable {
+        /// The topic.
+        topic: String,
+        /// The publishers' type.
+        type_name: String,
+    },
+    /// The topic's publishers publish different types, and `--type` did not choose.
+    #[error("{topic} is published with several types ({}); pass --type", types.join(", "))]
+    SeveralTypes {
+        /// The topic.
+        topic: String,
+        /// The types.
+        types: Vec<String>,
+    },
+    /// The DDS topic could not be created.
+    #[error("topic {topic}: {reason}")]
+    Topic {
+        /// The topic.
+        topic: String,
+        /// ros2-client's reason.
+        reason: String,
+    },
+    /// The subscription could not be created.
+    #[error("cannot subscribe to {topic}: {reason}")]
+    Subscribe {
+        /// The topic.
+        topic: String,
+        /// ros2-client's reason.
+        reason: String,
+    },
+    /// The Ctrl-C handler could not be installed (one is already, say).
+    #[error("cannot install the Ctrl-C handler: {0}")]
+    CtrlC(ctrlc::Error),
+    /// The DDS spinner could not be started; ros2-client's reason.
+    #[error("{0}")]
+    Spinner(String),
+    /// A received message could not be written as YAML.
+    #[error("cannot print a message: {0}")]
+    Print(yaml::Error),
+    /// The topic's publishers publish other types than the one echoed (DDS would never match
+    /// them).
+    #[error("{topic} is published as {}, not {echoed}", published.join(", "))]
+    WrongType {
+        /// The topic.
+        topic: String,
+        /// The publishers' types.
+        published: Vec<String>,
+        /// The type echoed.
+        echoed: String,
+    },
+    /// `timeout` passed before `count` messages arrived.
+    #[error(
+        "timed out after {} s: received {received} of {wanted} messages on {topic}",
+        waited.as_secs_f64()
+    )]
+    TimedOut {
+        /// The topic.
+        topic: String,
+        /// The timeout.
+        waited: Duration,
+        /// Messages printed.
+        received: u64,
+        /// Messages asked for.
+        wanted: u64,
+    },
+    /// `timeout` passed without `count` and no message arrived.
+    #[error(
+        "no message on {topic} within {} s ({publishers} publisher(s) seen)",
+        waited.as_secs_f64()
+    )]
+    NoMessage {
+        /// The topic.
+        topic: String,
+        /// The timeout.
+        waited: Duration,
+        /// How many publishers discovery found on the topic.
+        publishers: usize,
+    },
+}
+
+/// Why a type name names no type `cstep echo` can print.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum EchoTypeError {
+    /// Not `pkg/msg/Name` or `pkg/Name`; the name as given.
+    #[error("message type \"{0}\" is not of the form pkg/msg/Name")]
+    Form(String),
+    /// A type cstep does not mirror; its `pkg/msg/Name`.
+    #[error("cstep echo cannot decode {0}: it knows {known}", known = EchoType::known_list())]
+    Unknown(String),
 }
 
 /// A message type cstep mirrors, and so can decode and print.
@@ -114,24 +249,15 @@ impl EchoType {
     }
 
     /// The type named `pkg/msg/Name` or `pkg/Name`; an error lists the types cstep knows.
-    pub fn parse(name: &str) -> Result<Self, String> {
+    pub fn parse(name: &str) -> Result<Self, EchoTypeError> {
         let canonical = match name.trim().split('/').collect::<Vec<_>>()[..] {
             [package, "msg", kind] | [package, kind] => format!("{package}/msg/{kind}"),
-            _ => {
-                return Err(format!(
-                    "message type \"{name}\" is not of the form pkg/msg/Name"
-                ))
-            }
+            _ => return Err(EchoTypeError::Form(name.to_owned())),
         };
         Self::ALL
             .into_iter()
             .find(|t| t.name() == canonical)
-            .ok_or_else(|| {
-                format!(
-                    "cstep echo cannot decode {canonical}: it knows {}",
-                    Self::known_list()
-                )
-            })
+            .ok_or(EchoTypeError::Unknown(canonical))
     }
 
     /// The ROS name of a DDS type name (`pkg::msg::dds_::Name_` → `pkg/msg/Name`), if it is one.
@@ -194,16 +320,14 @@ fn publishers(context: &Context, topic: &str) -> Publishers {
 
 /// Runs `cstep echo`: prints each message on the topic to `out` as a YAML document followed by
 /// `---`, until `count` messages, the timeout, Ctrl-C, or a closed output.
-pub fn echo(options: &EchoOptions, out: &mut dyn Write) -> Result<(), String> {
+pub fn echo(options: &EchoOptions, out: &mut dyn Write) -> Result<(), EchoError> {
     if options.count == Some(0) {
-        return Err("--count must be at least 1".into());
+        return Err(EchoError::ZeroCount);
     }
     let topic = resolve("/", options.topic.trim());
-    Name::parse(&topic).map_err(|e| {
-        format!(
-            "topic name \"{}\" is not a valid ROS name ({e:?})",
-            options.topic
-        )
+    Name::parse(&topic).map_err(|e| EchoError::TopicName {
+        topic: options.topic.clone(),
+        reason: format!("{e:?}"),
     })?;
     let given = options
         .type_name
@@ -212,14 +336,14 @@ pub fn echo(options: &EchoOptions, out: &mut dyn Write) -> Result<(), String> {
         .transpose()?;
     let started = Instant::now();
 
-    let context = context_from_env(false).map_err(|e| e.to_string())?;
+    let context = context_from_env(false)?;
     let node_name = format!("cstep_echo_{}", std::process::id());
     let mut node = context
         .new_node(
-            NodeName::new("/", &node_name).map_err(|e| format!("node name: {e:?}"))?,
+            NodeName::new("/", &node_name).map_err(|e| EchoError::NodeName(format!("{e:?}")))?,
             NodeOptions::new().enable_rosout(false),
         )
-        .map_err(|e| format!("cannot create the echo node: {e:?}"))?;
+        .map_err(|e| EchoError::CreateNode(format!("{e:?}")))?;
 
     let kind = match given.or_else(|| EchoType::of_cstep_topic(&topic)) {
         Some(kind) => kind,
@@ -247,7 +371,10 @@ pub fn echo(options: &EchoOptions, out: &mut dyn Write) -> Result<(), String> {
             kind.type_name(),
             &qos,
         )
-        .map_err(|e| format!("topic {topic}: {e:?}"))?;
+        .map_err(|e| EchoError::Topic {
+            topic: topic.clone(),
+            reason: format!("{e:?}"),
+        })?;
 
     let run = Run {
         context: &context,
@@ -272,7 +399,7 @@ fn discover_type(
     context: &Context,
     topic: &str,
     timeout: Option<Duration>,
-) -> Result<EchoType, String> {
+) -> Result<EchoType, EchoError> {
     let wait = timeout.map_or(TYPE_DISCOVERY_WAIT, |t| t.min(TYPE_DISCOVERY_WAIT));
     let deadline = Instant::now() + wait;
     loop {
@@ -280,26 +407,22 @@ fn discover_type(
         match &seen.types[..] {
             [] if Instant::now() < deadline => std::thread::sleep(Duration::from_millis(100)),
             [] => {
-                return Err(format!(
-                    "cannot tell the type of {topic}: no publisher found within {:.0} s and it is \
-                     not one of cstep's topics; pass --type pkg/msg/Name (one of {})",
-                    wait.as_secs_f64(),
-                    EchoType::known_list()
-                ))
+                return Err(EchoError::NoPublisher {
+                    topic: topic.to_owned(),
+                    waited: wait,
+                })
             }
             [one] => {
-                return EchoType::parse(one).map_err(|_| {
-                    format!(
-                        "{topic} carries {one}, which cstep echo cannot decode (it knows {})",
-                        EchoType::known_list()
-                    )
+                return EchoType::parse(one).map_err(|_| EchoError::Undecodable {
+                    topic: topic.to_owned(),
+                    type_name: one.clone(),
                 })
             }
             several => {
-                return Err(format!(
-                    "{topic} is published with several types ({}); pass --type",
-                    several.join(", ")
-                ))
+                return Err(EchoError::SeveralTypes {
+                    topic: topic.to_owned(),
+                    types: several.to_vec(),
+                })
             }
         }
     }
@@ -321,24 +444,31 @@ impl Run<'_> {
         topic: &Topic,
         qos: QosProfile,
         out: &mut dyn Write,
-    ) -> Result<(), String> {
+    ) -> Result<(), EchoError> {
         let subscription = node
             .create_subscription::<M>(topic, Some(qos))
-            .map_err(|e| format!("cannot subscribe to {}: {e:?}", self.topic))?;
+            .map_err(|e| EchoError::Subscribe {
+                topic: self.topic.to_owned(),
+                reason: format!("{e:?}"),
+            })?;
         let stop = Arc::new(AtomicBool::new(false));
         {
             let stop = stop.clone();
             ctrlc::set_handler(move || stop.store(true, Ordering::SeqCst))
-                .map_err(|e| format!("cannot install the Ctrl-C handler: {e}"))?;
+                .map_err(EchoError::CtrlC)?;
         }
         let executor = smol::LocalExecutor::new();
         executor
-            .spawn(node.spinner().map_err(|e| format!("{e:?}"))?.spin())
+            .spawn(
+                node.spinner()
+                    .map_err(|e| EchoError::Spinner(format!("{e:?}")))?
+                    .spin(),
+            )
             .detach();
 
         let mut received: u64 = 0;
         let wanted = self.options.count;
-        let ending: Result<Ending, String> = smol::block_on(executor.run(async {
+        let ending: Result<Ending, EchoError> = smol::block_on(executor.run(async {
             let messages = subscription.async_stream();
             futures::pin_mut!(messages);
             let mut tick = smol::Timer::interval(Duration::from_millis(100));
@@ -351,8 +481,7 @@ impl Run<'_> {
                                 // A mismatched --type may decode into nonsense: check first.
                                 self.check_publisher_types()?;
                             }
-                            let document = to_yaml(&message)
-                                .map_err(|e| format!("cannot print a message: {e}"))?;
+                            let document = to_yaml(&message).map_err(EchoError::Print)?;
                             if out
                                 .write_all(document.as_bytes())
                                 .and_then(|()| out.write_all(b"---\n"))
@@ -389,17 +518,19 @@ impl Run<'_> {
         }));
         match ending? {
             Ending::TimedOut => {
-                let waited = self.options.timeout.unwrap_or_default().as_secs_f64();
+                let waited = self.options.timeout.unwrap_or_default();
                 match wanted {
-                    Some(n) if received < n => Err(format!(
-                        "timed out after {waited} s: received {received} of {n} messages on {}",
-                        self.topic
-                    )),
-                    None if received == 0 => Err(format!(
-                        "no message on {} within {waited} s ({} publisher(s) seen)",
-                        self.topic,
-                        publishers(self.context, self.topic).count
-                    )),
+                    Some(n) if received < n => Err(EchoError::TimedOut {
+                        topic: self.topic.to_owned(),
+                        waited,
+                        received,
+                        wanted: n,
+                    }),
+                    None if received == 0 => Err(EchoError::NoMessage {
+                        topic: self.topic.to_owned(),
+                        waited,
+                        publishers: publishers(self.context, self.topic).count,
+                    }),
                     _ => Ok(()),
                 }
             }
@@ -409,15 +540,15 @@ impl Run<'_> {
 
     /// Fails when the topic has publishers and none of them publishes this run's type (DDS
     /// would never match them, and the echo would wait in silence).
-    fn check_publisher_types(&self) -> Result<(), String> {
+    fn check_publisher_types(&self) -> Result<(), EchoError> {
         let seen = publishers(self.context, self.topic);
         let ours = self.kind.name();
         if !seen.types.is_empty() && !seen.types.contains(&ours) {
-            return Err(format!(
-                "{} is published as {}, not {ours}",
-                self.topic,
-                seen.types.join(", ")
-            ));
+            return Err(EchoError::WrongType {
+                topic: self.topic.to_owned(),
+                published: seen.types,
+                echoed: ours,
+            });
         }
         Ok(())
     }
@@ -442,13 +573,17 @@ mod tests {
             Ok(EchoType::Empowerment)
         );
         assert_eq!(EchoType::parse("nav_msgs/Odometry"), Ok(EchoType::Odometry));
-        let err = EchoType::parse("std_msgs/msg/String").unwrap_err();
+        let err = EchoType::parse("std_msgs/msg/String")
+            .unwrap_err()
+            .to_string();
         assert!(
             err.contains("std_msgs/msg/String") && err.contains("sensor_msgs/msg/LaserScan"),
             "{err}"
         );
-        let err = EchoType::parse("Odometry").unwrap_err();
-        assert!(err.contains("pkg/msg/Name"), "{err}");
+        assert_eq!(
+            EchoType::parse("Odometry").unwrap_err().to_string(),
+            "message type \"Odometry\" is not of the form pkg/msg/Name"
+        );
     }
 
     #[test]
@@ -479,5 +614,36 @@ mod tests {
         );
         assert_eq!(EchoType::of_cstep_topic("drone1/cstep/reward"), None);
         assert_eq!(EchoType::of_cstep_topic("/cstep/evaluate"), None);
+    }
+
+    #[test]
+    fn timeouts_read_in_seconds_as_they_always_did() {
+        let topic = "/cstep/empowerment".to_owned();
+        let timed_out = EchoError::TimedOut {
+            topic: topic.clone(),
+            waited: Duration::from_millis(1500),
+            received: 1,
+            wanted: 3,
+        };
+        assert_eq!(
+            timed_out.to_string(),
+            "timed out after 1.5 s: received 1 of 3 messages on /cstep/empowerment"
+        );
+        let silent = EchoError::NoMessage {
+            topic: topic.clone(),
+            waited: Duration::from_secs(3),
+            publishers: 0,
+        };
+        assert_eq!(
+            silent.to_string(),
+            "no message on /cstep/empowerment within 3 s (0 publisher(s) seen)"
+        );
+        let unknown = EchoError::NoPublisher {
+            topic,
+            waited: TYPE_DISCOVERY_WAIT,
+        };
+        assert!(unknown
+            .to_string()
+            .contains("no publisher found within 5 s"));
     }
 }

@@ -25,19 +25,50 @@ pub fn declare(
     let declared = parameters.iter().fold(options, |options, (p, value)| {
         options.declare_parameter_with_descriptor(ros_value(value), descriptor(p))
     });
+    // ros2-client's callbacks answer Result<(), String>: the String is the refusal reason the
+    // parameter services send back to the caller.
     declared
         .parameter_validator(Box::new(|name, value| {
-            let p = find(name).ok_or_else(|| format!("'{name}' is not a cstep parameter"))?;
-            p.check(&yaml(name, value)?).map(|_| ())
+            checked(name, value).map(|_| ()).map_err(|e| e.to_string())
         }))
         .parameter_set_action(Box::new(move |name, value| {
-            if let Some(p) = find(name).filter(|p| p.change == Change::Live) {
-                if let Some(value) = p.check(&yaml(name, value)?)? {
+            if find(name).is_some_and(|p| p.change == Change::Live) {
+                if let (p, Some(value)) = checked(name, value).map_err(|e| e.to_string())? {
                     apply(p, &value);
                 }
             }
             Ok(())
         }))
+}
+
+/// Why a set over the parameter services is refused; its text is the reason the caller reads.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+enum SetError {
+    /// The name is not one of [`crate::parameters::PARAMETERS`].
+    #[error("'{0}' is not a cstep parameter")]
+    Unknown(String),
+    /// An array or unset value, where every cstep parameter takes one value.
+    #[error("'{name}' takes a single value, got {kind:?}")]
+    NotSingle {
+        /// The parameter.
+        name: String,
+        /// The type of the value set.
+        kind: ParameterType,
+    },
+    /// The parameter's rule refuses the value ([`Parameter::check`]'s reason).
+    #[error("{0}")]
+    Rule(String),
+}
+
+/// The parameter named `name` and `value` checked by its rule (`None`: an optional parameter
+/// unset), or why the set is refused.
+fn checked(
+    name: &str,
+    value: &ParameterValue,
+) -> Result<(&'static Parameter, Option<Value>), SetError> {
+    let p = find(name).ok_or_else(|| SetError::Unknown(name.to_owned()))?;
+    let value = p.check(&yaml(name, value)?).map_err(SetError::Rule)?;
+    Ok((p, value))
 }
 
 /// The descriptor `ros2 param describe` shows for `p`.
@@ -86,16 +117,16 @@ fn ros_value(value: Option<&Value>) -> ParameterValue {
 }
 
 /// A value set over the parameter services, as a parameters file would hold it, for the rule.
-fn yaml(name: &str, value: &ParameterValue) -> Result<Yaml, String> {
+fn yaml(name: &str, value: &ParameterValue) -> Result<Yaml, SetError> {
     match value {
         ParameterValue::Boolean(b) => Ok(Yaml::Bool(*b)),
         ParameterValue::Integer(i) => Ok(Yaml::Number((*i).into())),
         ParameterValue::Double(d) => Ok(Yaml::Number((*d).into())),
         ParameterValue::String(s) => Ok(Yaml::String(s.clone())),
-        other => Err(format!(
-            "'{name}' takes a single value, got {:?}",
-            other.to_parameter_type()
-        )),
+        other => Err(SetError::NotSingle {
+            name: name.to_owned(),
+            kind: other.to_parameter_type(),
+        }),
     }
 }
 
@@ -129,8 +160,9 @@ mod tests {
     #[test]
     fn values_set_over_ros_are_checked_by_the_table_rules() {
         let check = |name: &str, value: ParameterValue| {
-            let p = find(name).unwrap();
-            p.check(&yaml(name, &value)?)
+            checked(name, &value)
+                .map(|(_, value)| value)
+                .map_err(|e| e.to_string())
         };
         assert_eq!(
             check("safety_coefficient", ParameterValue::Double(0.5)),
@@ -142,7 +174,14 @@ mod tests {
         );
         assert!(check("safety_coefficient", ParameterValue::Double(f64::NAN)).is_err());
         assert!(check("model", ParameterValue::String("boat".into())).is_err());
-        assert!(check("seed", ParameterValue::IntegerArray(vec![1])).is_err());
+        assert_eq!(
+            check("seed", ParameterValue::IntegerArray(vec![1])),
+            Err("'seed' takes a single value, got IntegerArray".into())
+        );
+        assert_eq!(
+            check("speed", ParameterValue::Double(1.0)),
+            Err("'speed' is not a cstep parameter".into())
+        );
     }
 
     #[test]

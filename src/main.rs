@@ -10,8 +10,8 @@ fn main() -> ExitCode {
     let command = cli::Cli::parse();
     match cli::run(command) {
         Ok(()) => ExitCode::SUCCESS,
-        Err(message) => {
-            eprintln!("cstep: error: {message}");
+        Err(error) => {
+            eprintln!("cstep: error: {error}");
             ExitCode::FAILURE
         }
     }

@@ -10,7 +10,7 @@ use serde::Serialize;
 use cstep::config::Settings;
 use cstep::estimator::Estimator;
 
-use super::Format;
+use super::{CliError, Format};
 
 /// Arguments of `cstep bench`.
 #[derive(Debug, clap::Args)]
@@ -53,7 +53,7 @@ struct Row {
 }
 
 /// Runs `cstep bench`.
-pub fn run(args: BenchArgs) -> Result<(), String> {
+pub fn run(args: BenchArgs) -> Result<(), CliError> {
     let rows: Vec<(String, usize, usize)> =
         if args.model.is_none() && args.trajectories.is_none() && args.steps.is_none() {
             vec![
@@ -71,7 +71,10 @@ pub fn run(args: BenchArgs) -> Result<(), String> {
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(args.threads.max(1))
         .build()
-        .map_err(|e| format!("cannot start {} threads: {e}", args.threads))?;
+        .map_err(|source| CliError::ThreadPool {
+            threads: args.threads,
+            source,
+        })?;
     let mut table = Vec::new();
     for (model, trajectories, steps) in rows {
         let mut overrides = vec![
@@ -80,8 +83,8 @@ pub fn run(args: BenchArgs) -> Result<(), String> {
             format!("steps:={steps}"),
         ];
         overrides.extend(args.params.iter().cloned());
-        let settings = Settings::load(None, "cstep_node", &overrides).map_err(|e| e.to_string())?;
-        let estimator = Estimator::from_settings(&settings).map_err(|e| e.to_string())?;
+        let settings = Settings::load(None, "cstep_node", &overrides)?;
+        let estimator = Estimator::from_settings(&settings)?;
         let row = pool.install(|| measure(&estimator, &model, &args));
         if args.format == Format::Text {
             eprintln!(
@@ -94,7 +97,7 @@ pub fn run(args: BenchArgs) -> Result<(), String> {
     match args.format {
         Format::Json => println!(
             "{}",
-            serde_json::to_string_pretty(&table).map_err(|e| e.to_string())?
+            serde_json::to_string_pretty(&table).map_err(CliError::Json)?
         ),
         Format::Text => {
             println!(

@@ -13,7 +13,7 @@ use ros2_client::{MessageTypeName, Name, NodeName, NodeOptions, QosProfile};
 use cstep::arena::{Arena, Flight};
 use cstep::plot::{flight_svg, FlightSample};
 use cstep::ros::args::RosArgs;
-use cstep::ros::context::context_from_env;
+use cstep::ros::context::{context_from_env, ContextError};
 use cstep::ros::convert::scan_to_laser_scan;
 use cstep::ros::messages::{
     EmpoweredReward, Empowerment, Header, LaserScan, Odometry, PoseStamped, RosMessage, Time,
@@ -21,6 +21,7 @@ use cstep::ros::messages::{
 use cstep::scene::Lidar;
 
 use super::node::stop_on_ctrl_c;
+use super::CliError;
 
 /// Arguments of `cstep demo`.
 #[derive(Debug, clap::Args)]
@@ -33,16 +34,66 @@ pub struct DemoArgs {
     plot: PathBuf,
 }
 
+/// `cstep demo`'s own failures: its arguments, its simulated drone, its plot.
+#[derive(Debug, thiserror::Error)]
+pub enum DemoError {
+    /// `--duration` is not a positive number of seconds.
+    #[error("--duration must be a positive number of seconds, got {0}")]
+    Duration(f64),
+    /// The drone's DDS context could not be set up from the environment.
+    #[error(transparent)]
+    Context(#[from] ContextError),
+    /// ros2-client refuses one of the drone's fixed node or topic names; its reason.
+    #[error("{0}")]
+    Name(String),
+    /// ros2-client could not create the drone's node.
+    #[error("cannot create the demo drone node: {0}")]
+    DroneNode(String),
+    /// The DDS topic could not be created.
+    #[error("topic {name}: {reason}")]
+    Topic {
+        /// The topic.
+        name: String,
+        /// ros2-client's reason.
+        reason: String,
+    },
+    /// A publisher, subscription or the spinner of the drone could not be created.
+    #[error("demo drone: {0}")]
+    Drone(String),
+    /// The node's topics were not discovered in time.
+    #[error("the node did not appear on DDS within 20 s")]
+    NodeNotFound,
+    /// The node's thread panicked.
+    #[error("the node thread failed")]
+    NodeThread,
+    /// The plot's directory could not be created.
+    #[error("{}: {source}", dir.display())]
+    PlotDirectory {
+        /// The directory.
+        dir: PathBuf,
+        /// Why.
+        source: std::io::Error,
+    },
+    /// The plot could not be written.
+    #[error("{}: cannot write the plot: {source}", plot.display())]
+    WritePlot {
+        /// The plot's file.
+        plot: PathBuf,
+        /// Why.
+        source: std::io::Error,
+    },
+    /// The flight ended without one score from the node.
+    #[error("no scan was scored: the node did not answer")]
+    NothingScored,
+}
+
 /// Scans per second the simulated LiDAR publishes.
 const SCAN_RATE_HZ: f64 = 10.0;
 
 /// Runs `cstep demo`.
-pub fn run(args: DemoArgs) -> Result<(), String> {
+pub fn run(args: DemoArgs) -> Result<(), CliError> {
     if !(args.duration.is_finite() && args.duration > 0.0) {
-        return Err(format!(
-            "--duration must be a positive number of seconds, got {}",
-            args.duration
-        ));
+        return Err(DemoError::Duration(args.duration).into());
     }
     // Never leave the machine (no static peers, no deprecated override); a private domain
     // unless the user chose one.
@@ -58,14 +109,15 @@ pub fn run(args: DemoArgs) -> Result<(), String> {
         std::thread::spawn(move || cstep::ros::node::run(&[], &RosArgs::default(), node_stop));
     let flown = fly(&args, &stop);
     stop.store(true, Ordering::SeqCst);
-    let node_result = node
-        .join()
-        .map_err(|_| "the node thread failed".to_owned())?;
+    let node_result = node.join().map_err(|_| DemoError::NodeThread)?;
     let samples = flown?;
-    node_result.map_err(|e| e.to_string())?;
+    node_result?;
     summarize(&samples);
     if let Some(dir) = args.plot.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+        std::fs::create_dir_all(dir).map_err(|source| DemoError::PlotDirectory {
+            dir: dir.to_owned(),
+            source,
+        })?;
     }
     std::fs::write(
         &args.plot,
@@ -74,10 +126,13 @@ pub fn run(args: DemoArgs) -> Result<(), String> {
             &samples.iter().map(|s| s.sample).collect::<Vec<_>>(),
         ),
     )
-    .map_err(|e| format!("{}: cannot write the plot: {e}", args.plot.display()))?;
+    .map_err(|source| DemoError::WritePlot {
+        plot: args.plot.clone(),
+        source,
+    })?;
     println!("plot: {}", args.plot.display());
     if samples.is_empty() {
-        return Err("no scan was scored: the node did not answer".into());
+        return Err(DemoError::NothingScored.into());
     }
     Ok(())
 }
@@ -90,32 +145,36 @@ struct Scored {
 }
 
 /// Flies the drone: publishes odometry and scans at 10 Hz and collects the node's answers.
-fn fly(args: &DemoArgs, stop: &std::sync::atomic::AtomicBool) -> Result<Vec<Scored>, String> {
-    let context = context_from_env(false).map_err(|e| e.to_string())?;
+fn fly(args: &DemoArgs, stop: &std::sync::atomic::AtomicBool) -> Result<Vec<Scored>, DemoError> {
+    let context = context_from_env(false)?;
     let mut node = context
         .new_node(
-            NodeName::new("/", "cstep_demo_drone").map_err(|e| format!("{e:?}"))?,
+            NodeName::new("/", "cstep_demo_drone")
+                .map_err(|e| DemoError::Name(format!("{e:?}")))?,
             NodeOptions::new().enable_rosout(false),
         )
-        .map_err(|e| format!("cannot create the demo drone node: {e:?}"))?;
+        .map_err(|e| DemoError::DroneNode(format!("{e:?}")))?;
     let reliable = QosProfile::publisher_default()
         .reliability_reliable(WhenFull::Wait(Duration::from_millis(10)))
         .durability(Durability::Volatile)
         .history(History::KeepLast { depth: 50 });
     let topic = |name: &str, type_name: MessageTypeName| {
         node.create_topic(
-            &Name::parse(name).map_err(|e| format!("{e:?}"))?,
+            &Name::parse(name).map_err(|e| DemoError::Name(format!("{e:?}")))?,
             type_name,
             &reliable,
         )
-        .map_err(|e| format!("topic {name}: {e:?}"))
+        .map_err(|e| DemoError::Topic {
+            name: name.to_owned(),
+            reason: format!("{e:?}"),
+        })
     };
     let odom_topic = topic("/odom", Odometry::type_name())?;
     let scan_topic = topic("/scan", LaserScan::type_name())?;
     let empowerment_topic = topic("/cstep/empowerment", Empowerment::type_name())?;
     let reward_topic = topic("/cstep/reward", EmpoweredReward::type_name())?;
     let goal_topic = topic("/goal_pose", PoseStamped::type_name())?;
-    let fail = |e| format!("demo drone: {e:?}");
+    let fail = |e| DemoError::Drone(format!("{e:?}"));
     let odom_pub = node
         .create_publisher::<Odometry>(&odom_topic, None)
         .map_err(fail)?;
@@ -145,7 +204,7 @@ fn fly(args: &DemoArgs, stop: &std::sync::atomic::AtomicBool) -> Result<Vec<Scor
             || reward_sub.get_publisher_count(&node) == 0
         {
             if stop.load(Ordering::SeqCst) || discovery.elapsed() > Duration::from_secs(20) {
-                return Err("the node did not appear on DDS within 20 s".to_owned());
+                return Err(DemoError::NodeNotFound);
             }
             smol::Timer::after(Duration::from_millis(50)).await;
         }

@@ -4,6 +4,8 @@ use std::time::Duration;
 
 use cstep::ros::echo::{echo, EchoOptions};
 
+use super::CliError;
+
 /// Arguments of `cstep echo`.
 #[derive(Debug, clap::Args)]
 pub struct EchoArgs {
@@ -26,6 +28,9 @@ pub struct EchoArgs {
     timeout: Option<Duration>,
 }
 
+/// `--timeout`'s value parser: a positive, finite number of seconds. Its error stays a String,
+/// the usual clap value-parser error: clap prints the text inside its own line
+/// (`invalid value '…' for '--timeout <S>': …`, exit 2) and nothing else reads it.
 fn parse_seconds(text: &str) -> Result<Duration, String> {
     text.parse::<f64>()
         .ok()
@@ -35,12 +40,12 @@ fn parse_seconds(text: &str) -> Result<Duration, String> {
 }
 
 /// Runs `cstep echo` until the count, the timeout or Ctrl-C.
-pub fn run(args: EchoArgs) -> Result<(), String> {
+pub fn run(args: EchoArgs) -> Result<(), CliError> {
     let options = EchoOptions {
         topic: args.topic,
         type_name: args.type_name,
         count: if args.once { Some(1) } else { args.count },
         timeout: args.timeout,
     };
-    echo(&options, &mut std::io::stdout().lock()).map_err(|e| e.to_string())
+    Ok(echo(&options, &mut std::io::stdout().lock())?)
 }

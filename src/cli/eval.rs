@@ -10,12 +10,12 @@ use serde_json::Value;
 use cstep::config::{Settings, DEFAULT_NODE_NAME};
 use cstep::estimator::Estimator;
 use cstep::ros::convert::{
-    empowerment_message, goal_position, laser_scan_to_scan, odometry_to_state,
+    empowerment_message, goal_position, laser_scan_to_scan, odometry_to_state, InputError,
 };
 use cstep::ros::messages::{Empowerment, Header, LaserScan, Odometry, Point};
 use cstep::scoring::{score, Score};
 
-use super::Format;
+use super::{CliError, Format};
 
 /// Arguments of `cstep eval`.
 #[derive(Debug, clap::Args)]
@@ -53,26 +53,77 @@ struct EvalOutput {
     empowerment_term: f64,
 }
 
+/// What is wrong with `cstep eval`'s input files or `--goal`: one line naming the file (or
+/// `--goal`), the field and the value.
+#[derive(Debug, thiserror::Error)]
+pub enum EvalError {
+    /// A message file could not be read.
+    #[error("{}: cannot read the file: {source}", path.display())]
+    Unreadable {
+        /// The file.
+        path: PathBuf,
+        /// Why.
+        source: std::io::Error,
+    },
+    /// A message file is not JSON, or not the message's fields.
+    #[error("{}: not a valid message: {source}", path.display())]
+    NotMessage {
+        /// The file.
+        path: PathBuf,
+        /// serde_json's reason.
+        source: serde_json::Error,
+    },
+    /// A message file holds JSON other than an object (serde would read an array as the
+    /// message's fields in order, and `[]` as the default message).
+    #[error(
+        "{}: not a valid message: expected a JSON object, got {kind} (the message's fields by \
+         their ROS names)",
+        path.display()
+    )]
+    NotObject {
+        /// The file.
+        path: PathBuf,
+        /// What it holds: "an array", "a number", ...
+        kind: &'static str,
+    },
+    /// A message whose field cannot be used (the node would reject it alike).
+    #[error("{}: {problem}", path.display())]
+    Input {
+        /// The file.
+        path: PathBuf,
+        /// The field and what is wrong with it.
+        problem: InputError,
+    },
+    /// `--goal` is not two or three numbers; the text given.
+    #[error("--goal: expected two or three numbers X,Y[,Z], got \"{0}\"")]
+    GoalForm(String),
+    /// `--goal` is not a position the node would accept.
+    #[error("--goal: {0}")]
+    Goal(InputError),
+}
+
 /// Runs `cstep eval`.
-pub fn run(args: EvalArgs) -> Result<(), String> {
+pub fn run(args: EvalArgs) -> Result<(), CliError> {
     let mut overrides = args.params.clone();
     if let Some(seed) = args.seed {
         overrides.push(format!("seed:={seed}"));
     }
-    let settings = Settings::load(Some(&args.config), DEFAULT_NODE_NAME, &overrides)
-        .map_err(|e| e.to_string())?;
+    let settings = Settings::load(Some(&args.config), DEFAULT_NODE_NAME, &overrides)?;
     let odom: Odometry = read_json(&args.odom)?;
     let scan_msg: LaserScan = read_json(&args.scan)?;
-    let state = odometry_to_state(&odom).map_err(|e| format!("{}: {e}", args.odom.display()))?;
-    let scan =
-        laser_scan_to_scan(&scan_msg).map_err(|e| format!("{}: {e}", args.scan.display()))?;
+    let input = |path: &Path| {
+        let path = path.to_owned();
+        move |problem| EvalError::Input { path, problem }
+    };
+    let state = odometry_to_state(&odom).map_err(input(&args.odom))?;
+    let scan = laser_scan_to_scan(&scan_msg).map_err(input(&args.scan))?;
     let goal = args
         .goal
         .as_deref()
         .map(|g| parse_goal(g, state.position.z))
         .transpose()?;
 
-    let estimator = Estimator::from_settings(&settings).map_err(|e| e.to_string())?;
+    let estimator = Estimator::from_settings(&settings)?;
     let Score { estimate, reward } = score(
         &estimator,
         &state,
@@ -94,7 +145,7 @@ pub fn run(args: EvalArgs) -> Result<(), String> {
     match args.format {
         Format::Json => println!(
             "{}",
-            serde_json::to_string_pretty(&output).map_err(|e| e.to_string())?
+            serde_json::to_string_pretty(&output).map_err(CliError::Json)?
         ),
         Format::Text => {
             let e = &output.empowerment;
@@ -127,36 +178,37 @@ pub fn run(args: EvalArgs) -> Result<(), String> {
 /// The message in the JSON file at `path`: an object with the ROS field names. Anything else is
 /// refused — serde would read an array as the message's fields in order, and `[]` as the
 /// default message (a robot at rest at the origin).
-fn read_json<T: DeserializeOwned>(path: &Path) -> Result<T, String> {
-    let text = cstep::input_file::read_to_string(path)
-        .map_err(|e| format!("{}: cannot read the file: {e}", path.display()))?;
-    let invalid =
-        |e: &dyn std::fmt::Display| format!("{}: not a valid message: {e}", path.display());
-    let kind = match serde_json::from_str(&text).map_err(|e| invalid(&e))? {
-        Value::Object(_) => return serde_json::from_str(&text).map_err(|e| invalid(&e)),
+fn read_json<T: DeserializeOwned>(path: &Path) -> Result<T, EvalError> {
+    let text = cstep::input_file::read_to_string(path).map_err(|source| EvalError::Unreadable {
+        path: path.to_owned(),
+        source,
+    })?;
+    let invalid = |source| EvalError::NotMessage {
+        path: path.to_owned(),
+        source,
+    };
+    let kind = match serde_json::from_str(&text).map_err(invalid)? {
+        Value::Object(_) => return serde_json::from_str(&text).map_err(invalid),
         Value::Array(_) => "an array",
         Value::String(_) => "a string",
         Value::Number(_) => "a number",
         Value::Bool(_) => "a boolean",
         Value::Null => "null",
     };
-    Err(invalid(&format_args!(
-        "expected a JSON object, got {kind} (the message's fields by their ROS names)"
-    )))
+    Err(EvalError::NotObject {
+        path: path.to_owned(),
+        kind,
+    })
 }
 
 /// The `--goal X,Y[,Z]` position (Z defaults to the robot's height), checked as the node checks
 /// a goal.
-fn parse_goal(text: &str, default_z: f64) -> Result<Vector3<f64>, String> {
+fn parse_goal(text: &str, default_z: f64) -> Result<Vector3<f64>, EvalError> {
     let values: Result<Vec<f64>, _> = text.split(',').map(|v| v.trim().parse::<f64>()).collect();
     let goal = match values.as_deref() {
         Ok(&[x, y]) => Point { x, y, z: default_z },
         Ok(&[x, y, z]) => Point { x, y, z },
-        _ => {
-            return Err(format!(
-                "--goal: expected two or three numbers X,Y[,Z], got \"{text}\""
-            ))
-        }
+        _ => return Err(EvalError::GoalForm(text.to_owned())),
     };
-    goal_position(&goal).map_err(|e| format!("--goal: {e}"))
+    goal_position(&goal).map_err(EvalError::Goal)
 }

@@ -3,8 +3,11 @@
 mod bench;
 mod demo;
 mod echo;
+mod error;
 mod eval;
 mod node;
+
+pub use error::CliError;
 
 use clap::{Parser, Subcommand};
 
@@ -31,7 +34,7 @@ enum Command {
 }
 
 /// Runs a parsed command line; the error is one line for the user.
-pub fn run(cli: Cli) -> Result<(), String> {
+pub fn run(cli: Cli) -> Result<(), CliError> {
     match cli.command {
         Command::Eval(args) => eval::run(args),
         Command::Bench(args) => bench::run(args),

@@ -6,6 +6,8 @@ use std::sync::Arc;
 
 use cstep::ros::args::RosArgs;
 
+use super::CliError;
+
 /// Arguments of `cstep node`.
 #[derive(Debug, clap::Args)]
 pub struct NodeArgs {
@@ -28,44 +30,44 @@ pub struct NodeArgs {
 }
 
 /// Runs `cstep node` until Ctrl-C.
-pub fn run(args: NodeArgs) -> Result<(), String> {
-    let ros_args = RosArgs::parse(&args.ros_args).map_err(|e| e.to_string())?;
+pub fn run(args: NodeArgs) -> Result<(), CliError> {
+    let ros_args = RosArgs::parse(&args.ros_args)?;
     let stop = stop_on_ctrl_c()?;
     if args.exit_with_parent {
         exit_with_parent()?;
     }
-    cstep::ros::node::run(args.config.as_slice(), &ros_args, stop).map_err(|e| e.to_string())
+    Ok(cstep::ros::node::run(
+        args.config.as_slice(),
+        &ros_args,
+        stop,
+    )?)
 }
 
 /// Has the kernel send SIGTERM, which stops the node cleanly, when the parent process ends.
 #[cfg(target_os = "linux")]
-fn exit_with_parent() -> Result<(), String> {
+fn exit_with_parent() -> Result<(), CliError> {
     // SAFETY: getppid and prctl(PR_SET_PDEATHSIG, signal) take plain integers and touch no memory.
     let parent = unsafe { libc::getppid() };
     if unsafe { libc::prctl(libc::PR_SET_PDEATHSIG, libc::SIGTERM) } != 0 {
-        return Err(format!(
-            "--exit-with-parent: prctl failed: {}",
-            std::io::Error::last_os_error()
-        ));
+        return Err(CliError::ParentDeathSignal(std::io::Error::last_os_error()));
     }
     // A parent that ended before the request took effect sends nothing: it has been replaced.
     if unsafe { libc::getppid() } != parent {
-        return Err("--exit-with-parent: the parent process has already ended".into());
+        return Err(CliError::ParentGone);
     }
     Ok(())
 }
 
 /// Without the parent-death signal there is no reliable way to follow the parent.
 #[cfg(not(target_os = "linux"))]
-fn exit_with_parent() -> Result<(), String> {
-    Err("--exit-with-parent is supported on Linux only".into())
+fn exit_with_parent() -> Result<(), CliError> {
+    Err(CliError::ExitWithParentUnsupported)
 }
 
 /// A flag that Ctrl-C (SIGINT) or SIGTERM sets, so the node can leave the DDS domain cleanly.
-pub fn stop_on_ctrl_c() -> Result<Arc<AtomicBool>, String> {
+pub fn stop_on_ctrl_c() -> Result<Arc<AtomicBool>, CliError> {
     let stop = Arc::new(AtomicBool::new(false));
     let flag = stop.clone();
-    ctrlc::set_handler(move || flag.store(true, Ordering::SeqCst))
-        .map_err(|e| format!("cannot install the Ctrl-C handler: {e}"))?;
+    ctrlc::set_handler(move || flag.store(true, Ordering::SeqCst)).map_err(CliError::CtrlC)?;
     Ok(stop)
 }

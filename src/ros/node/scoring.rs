@@ -113,7 +113,8 @@ pub(super) struct Query<'a> {
 impl<'a> Query<'a> {
     /// The states of a batch request, or why its arrays cannot describe K states: `scan` must
     /// hold as many entries as `odom`, `goal` and `has_goal` none or as many (both alike), and
-    /// `in_collision` none or as many.
+    /// `in_collision` none or as many. The reason is a String: it is the `status` published
+    /// for every state of the refused batch.
     pub(super) fn batch(request: &'a EvaluateBatchRequest) -> Result<Vec<Self>, String> {
         let k = request.odom.len();
         let optional = [
@@ -151,7 +152,8 @@ impl<'a> Query<'a> {
 }
 impl Shared {
     /// Scores one state with safety coefficient `c`, with the markers of the evaluation if
-    /// asked; a malformed input is an error naming the field.
+    /// asked; a malformed input is an error naming the field, a String because it is the
+    /// `status` published in the rejected answer.
     pub(super) fn score(
         &self,
         query: &Query,

@@ -85,15 +85,18 @@ def executor(ros_context: Context) -> Iterator[SingleThreadedExecutor]:
 
 def wait_until(
     condition: Callable[[], bool],
-    what: str,
+    what: str | Callable[[], str],
     executor: SingleThreadedExecutor | None = None,
     timeout: float = DISCOVERY_TIMEOUT_S,
 ) -> None:
-    """Poll ``condition`` (spinning ``executor`` if given) until true; fail after ``timeout``."""
+    """Poll ``condition`` (spinning ``executor`` if given) until true; fail after ``timeout``.
+    ``what`` names what is awaited; a callable is asked at the failure, so the message can say
+    what was seen by then."""
     deadline = time.monotonic() + timeout
     while not condition():
         if time.monotonic() > deadline:
-            pytest.fail(f"timed out after {timeout:.0f} s waiting for {what}")
+            said = what() if callable(what) else what
+            pytest.fail(f"timed out after {timeout:.0f} s waiting for {said}")
         if executor is not None:
             executor.spin_once(timeout_sec=0.05)
         else:

@@ -141,13 +141,20 @@ class Rig:
         self.node.create_subscription(
             DiagnosticArray, "/diagnostics", self.diagnostics.append, RELIABLE
         )
+        reward = self.node.resolve_topic_name("cstep/reward")
         wait_until(
             lambda: (
                 self.scan.get_subscription_count() >= 1
                 and self.odom.get_subscription_count() >= 1
-                and self.node.count_publishers(self.node.resolve_topic_name("cstep/reward")) >= 1
+                and self.node.count_publishers(reward) >= 1
             ),
-            "the node's subscriptions and publishers",
+            lambda: (
+                "the node's subscriptions and publishers (matched subscribers of "
+                f"{self.scan.topic_name}: {self.scan.get_subscription_count()}, of "
+                f"{self.odom.topic_name}: {self.odom.get_subscription_count()}; publishers of "
+                f"{reward}: {self.node.count_publishers(reward)}; nodes seen: "
+                f"{self.node.get_node_names_and_namespaces()})"
+            ),
             executor,
         )
 

@@ -5,6 +5,7 @@ own robot over real rclpy; localhost only, a domain per test."""
 
 import os
 import subprocess
+import time
 from pathlib import Path
 
 import pytest
@@ -18,6 +19,10 @@ ROBOTS = {
     "/drone1": {"safety_coefficient": 0.5, "vx": 0.0, "width": 2.5},
     "/drone2": {"safety_coefficient": 2.0, "vx": 1.5, "width": 1.4},
 }
+
+
+# How long the two nodes get to discover each other before the test's participant starts.
+NODES_SETTLE_S = 3.0
 
 
 @pytest.fixture
@@ -39,6 +44,14 @@ def two_nodes(ros_domain):
                     cwd=REPO,
                 )
             )
+    # Let the two nodes find each other before this test's rclpy participant joins. Started
+    # within milliseconds of each other and of a Fast DDS participant, one of them is now and
+    # then never discovered by Fast DDS (its endpoints stay unlisted though Fast DDS acknowledges
+    # all of its SEDP data): 6 of 40 starts under full CPU load, 0 of 25 with rclpy joining 3 s
+    # later, 0 of 40 with one node. That is a discovery defect between RustDDS and Fast DDS, not
+    # a namespace one; it is reported in the issue notes (issue 13), with
+    # tests/python/repro_simultaneous_start.py to reproduce it.
+    time.sleep(NODES_SETTLE_S)
     yield procs
     for proc in procs:
         stop_gently(proc)

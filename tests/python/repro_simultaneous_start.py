@@ -9,6 +9,15 @@ nodes (``--rclpy-after 3``); 1 of 25 when rclpy is up 3 s before them (``--rclpy
 40 with one node (``--nodes 1``). Announcing the node's SPDP before its SEDP to a newcomer did not
 change it (6 of 40).
 
+What a loopback capture of a failed start shows: the node matches Fast DDS's built-in readers
+when it hears Fast DDS's SPDP and starts pushing its SEDP samples at once, before Fast DDS has its
+SPDP; Fast DDS drops those, then (once it has the SPDP) receives the later samples live, asks for
+the early ones, gets them and acknowledges every one — yet its graph lists only some of them
+(in one capture, of 15 publications and 14 subscriptions only the subscription sent last).
+A lead, not checked: in the failed starts the node was still creating endpoints, so live
+samples reached Fast DDS ahead of the repair of earlier ones; with rclpy joining 3 s late the
+node's SEDP history is complete and goes out as one in-order repair.
+
     .venv/bin/python tests/python/repro_simultaneous_start.py --runs 20
 
 Localhost-only discovery on a domain of its own (``--domain``, default 52).

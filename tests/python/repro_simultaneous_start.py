@@ -4,10 +4,10 @@ Two `cstep node`s in two namespaces, started within milliseconds of each other a
 (Fast DDS) participant, sometimes stay partly or wholly undiscovered by Fast DDS for good: rclpy
 never lists the node, or lists it without its subscriptions, although Fast DDS acknowledges all of
 the node's SEDP data (seen on the loopback interface). Measured on 2 cores with 3 busy loops
-beside it (`sh -c 'while :; do :; done'`): 6 of 40 starts; 0 of 25 when rclpy joins 3 s after the
+beside it (`sh -c 'while :; do :; done'`): 3 of 24 starts (2 of 25 with this script); 0 of 25 when rclpy joins 3 s after the
 nodes (``--rclpy-after 3``); 1 of 25 when rclpy is up 3 s before them (``--rclpy-before 3``); 0 of
 40 with one node (``--nodes 1``). Announcing the node's SPDP before its SEDP to a newcomer did not
-change it (6 of 40).
+help (6 of 40 with it).
 
 What a loopback capture of a failed start shows: the node matches Fast DDS's built-in readers
 when it hears Fast DDS's SPDP and starts pushing its SEDP samples at once, before Fast DDS has its

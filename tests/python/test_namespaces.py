@@ -47,7 +47,7 @@ def two_nodes(ros_domain):
     # Let the two nodes find each other before this test's rclpy participant joins. Started
     # within milliseconds of each other and of a Fast DDS participant, one of them is now and
     # then never discovered by Fast DDS (its endpoints stay unlisted though Fast DDS acknowledges
-    # all of its SEDP data): 6 of 40 starts under full CPU load, 0 of 25 with rclpy joining 3 s
+    # all of its SEDP data): 3 of 24 starts under full CPU load, 0 of 25 with rclpy joining 3 s
     # later, 0 of 40 with one node. That is a discovery defect between RustDDS and Fast DDS, not
     # a namespace one; it is reported in the issue notes (issue 13), with
     # tests/python/repro_simultaneous_start.py to reproduce it.

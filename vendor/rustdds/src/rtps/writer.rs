@@ -758,7 +758,7 @@ impl Writer {
     let blocked = self.send_message_to_readers(
       DeliveryMode::Multicast,
       message,
-      &mut self.readers.values(),
+      &mut self.live_readers(), // cstep patch (was self.readers.values())
       TrafficClass::Bulk,
     );
 
@@ -1016,7 +1016,7 @@ impl Writer {
         None => self.send_message_to_readers(
           DeliveryMode::Multicast,
           msg,
-          &mut self.readers.values(),
+          &mut self.live_readers(), // cstep patch (was self.readers.values())
           class,
         ),
         Some(reader_proxy) => self.send_message_to_readers(
@@ -2203,6 +2203,25 @@ impl Writer {
     }
   }
 
+  /// cstep patch: the readers that new samples are pushed to. A SEDP (discovery) writer pushes
+  /// only to readers that have sent it an ACKNACK, i.e. that have matched this writer: a newly
+  /// matched remote reader gets heartbeats until then and the whole history as one in-order
+  /// repair after. Pushed to at once, a remote participant that has not processed our SPDP yet
+  /// drops the early samples and gets later ones live ahead of their repair; Fast DDS 2.14 then
+  /// acknowledges samples it never hands to its discovery (see CSTEP_PATCH.md, section 4).
+  fn live_readers(&self) -> impl Iterator<Item = &RtpsReaderProxy> {
+    let sedp = [
+      EntityId::SEDP_BUILTIN_TOPIC_WRITER,
+      EntityId::SEDP_BUILTIN_PUBLICATIONS_WRITER,
+      EntityId::SEDP_BUILTIN_SUBSCRIPTIONS_WRITER,
+    ]
+    .contains(&self.entity_id());
+    self
+      .readers
+      .values()
+      .filter(move |rp| !sedp || rp.last_acknack_count.is_some())
+  }
+
   fn lookup_reader_proxy_mut(&mut self, guid: GUID) -> Option<&mut RtpsReaderProxy> {
     self.readers.get_mut(&guid)
   }
@@ -2950,6 +2969,18 @@ mod tests {
 
     // Built-in and user Writers alike answer an ACKNACK only after
     // nack_response_delay, from the SendRepairData timer.
+    // cstep patch (CSTEP_PATCH.md, section 4): a discovery (SEDP) writer pushes new samples only
+    // to readers that have acknacked it; a user writer to every matched reader.
+    #[test]
+    fn sedp_writer_pushes_only_to_readers_that_have_acknacked() {
+      let mut f = Fixture::sedp(3, 10);
+      assert_eq!(f.writer.live_readers().count(), 0, "pushed to a reader before its ACKNACK");
+      f.ack_nack([1, 2, 3], 1);
+      assert_eq!(f.writer.live_readers().count(), 1, "not pushed to after its ACKNACK");
+      let f = Fixture::user(3, 10, None);
+      assert_eq!(f.writer.live_readers().count(), 1, "a user writer withheld a push");
+    }
+
     #[test]
     fn acknack_schedules_repair_after_nack_response_delay() {
       for mut f in [Fixture::sedp(5, 8), Fixture::user(5, 8, None)] {

@@ -1,22 +1,14 @@
-"""Reproduces a discovery defect between cstep's RustDDS and Fast DDS (not a test: run it by hand).
+"""Measures a discovery defect between RustDDS and Fast DDS (not a test: run it by hand).
 
 Two `cstep node`s in two namespaces, started within milliseconds of each other and of an rclpy
-(Fast DDS) participant, sometimes stay partly or wholly undiscovered by Fast DDS for good: rclpy
-never lists the node, or lists it without its subscriptions, although Fast DDS acknowledges all of
-the node's SEDP data (seen on the loopback interface). Measured on 2 cores with 3 busy loops
-beside it (`sh -c 'while :; do :; done'`): 3 of 24 starts (2 of 25 with this script); 0 of 25 when rclpy joins 3 s after the
-nodes (``--rclpy-after 3``); 1 of 25 when rclpy is up 3 s before them (``--rclpy-before 3``); 0 of
-40 with one node (``--nodes 1``). Announcing the node's SPDP before its SEDP to a newcomer did not
-help (6 of 40 with it).
-
-What a loopback capture of a failed start shows: the node matches Fast DDS's built-in readers
-when it hears Fast DDS's SPDP and starts pushing its SEDP samples at once, before Fast DDS has its
-SPDP; Fast DDS drops those, then (once it has the SPDP) receives the later samples live, asks for
-the early ones, gets them and acknowledges every one — yet its graph lists only some of them
-(in one capture, of 15 publications and 14 subscriptions only the subscription sent last).
-A lead, not checked: in the failed starts the node was still creating endpoints, so live
-samples reached Fast DDS ahead of the repair of earlier ones; with rclpy joining 3 s late the
-node's SEDP history is complete and goes out as one in-order repair.
+(Fast DDS) participant, used to stay partly or wholly undiscovered by Fast DDS for good now and
+then: rclpy never listed a node, or listed it without its subscriptions, although Fast DDS
+acknowledged all of the node's SEDP samples (seen on the loopback interface). The fix holds a
+discovery writer's pushes until the remote reader has acknacked (vendor/rustdds/CSTEP_PATCH.md,
+section 4, with the figures). Measured before it on 2 cores with 3 busy loops beside it
+(`sh -c 'while :; do :; done'`): 3 of 24 starts (2 of 25 with this script); 0 of 25 when rclpy
+joins 3 s after the nodes (``--rclpy-after 3``); 1 of 25 when rclpy is up 3 s before them
+(``--rclpy-before 3``); 0 of 40 with one node (``--nodes 1``). With it: 0 of 40, three times.
 
     .venv/bin/python tests/python/repro_simultaneous_start.py --runs 20
 

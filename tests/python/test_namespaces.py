@@ -5,7 +5,8 @@ own robot over real rclpy; localhost only, a domain per test.
 
 The two nodes start together with the test's rclpy participant: before the SEDP patch in
 vendor/rustdds (CSTEP_PATCH.md, section 4), one of them was now and then never discovered by
-Fast DDS (CI failed here; 6 of 40 such starts under full CPU load, against 0 of 40 with it)."""
+Fast DDS (CI failed here; 5 of 40 such starts under full CPU load, against 0 of 40 with it:
+tests/python/repro_simultaneous_start.py)."""
 
 import os
 import subprocess

@@ -2967,8 +2967,6 @@ mod tests {
       }
     }
 
-    // Built-in and user Writers alike answer an ACKNACK only after
-    // nack_response_delay, from the SendRepairData timer.
     // cstep patch (CSTEP_PATCH.md, section 4): a discovery (SEDP) writer pushes new samples only
     // to readers that have acknacked it; a user writer to every matched reader.
     #[test]
@@ -2981,6 +2979,8 @@ mod tests {
       assert_eq!(f.writer.live_readers().count(), 1, "a user writer withheld a push");
     }
 
+    // Built-in and user Writers alike answer an ACKNACK only after
+    // nack_response_delay, from the SendRepairData timer.
     #[test]
     fn acknack_schedules_repair_after_nack_response_delay() {
       for mut f in [Fixture::sedp(5, 8), Fixture::user(5, 8, None)] {

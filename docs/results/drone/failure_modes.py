@@ -3,7 +3,9 @@ evaluation arenas and reports success by how close the goal lies to a wall, how 
 were with the block, where the failed episodes ended, and how saturated the actions are (for a
 tanh-squashed gSDE policy also the size of its pre-squash mean and exploration noise), success
 and collisions by the start's offset from the block's centre line (is the block straight ahead?),
-and when the collisions happen.
+when the collisions happen, and how the failures without a collision end: short of the goal or
+stalled on the way, and whether the policy still pushes there (chattering: large actions that
+cancel out over the last seconds, the drone nearly still).
 
     PYTHONPATH=py_bridge .venv/bin/python docs/results/drone/failure_modes.py \\
         --model docs/results/drone/models/unempowered-d17 --episodes 100
@@ -22,6 +24,7 @@ from cstep_bridge.env import CStepDroneEnv
 from cstep_bridge.flights import configurations, reset_options
 from cstep_bridge.noise_cap import state_noise
 from cstep_bridge.normalization import observation_normalizer
+from cstep_bridge.sim import CONTROL_HZ
 from cstep_bridge.world import rect_distance
 from stable_baselines3 import PPO
 
@@ -32,6 +35,11 @@ OFFSET_BINS = (0.0, 0.25, 0.5, 10.0)
 under 0.25 m the block's front face lies straight ahead of the start."""
 SATURATED = 0.95
 """An action component beyond this magnitude counts as saturated (the box is [−1, 1])."""
+SHORT_OF_GOAL = 1.0
+"""A failure without a collision ending nearer the goal than this (m) fell short of it; farther,
+it stalled on the way."""
+LAST_SECONDS = 3.0
+"""The end of an episode (s) over which its actions and speed are summarised."""
 
 
 def wall_distance(env: CStepDroneEnv, xy: np.ndarray) -> float:
@@ -76,13 +84,18 @@ def main() -> int:
             obs, info = env.reset(options=reset_options("drone", config))
             offset = abs(env.sim.arena.start[1] - env.sim.arena.block_y)
             done = False
+            flown, speeds = [], []
             while not done:
                 o = norm(obs)
                 action = model.predict(o, deterministic=True)[0]
                 observations.append(o)
-                actions.append(action)
+                flown.append(action)
                 obs, _, terminated, truncated, info = env.step(action)
+                speeds.append(np.linalg.norm(env.sim.state().velocity[:2]))
                 done = terminated or truncated
+            actions += flown
+            last = round(LAST_SECONDS * CONTROL_HZ)
+            tail = np.array(flown[-last:])
             goal, end = env.sim.goal[:2], np.asarray(info["position"])
             nearer_block = rect_distance(*end, env.sim.arena.block) < wall_distance(env, end)
             rows.append(
@@ -96,6 +109,9 @@ def main() -> int:
                     nearer_block,
                     info["time"],
                     offset,
+                    np.abs(tail).mean(),
+                    np.linalg.norm(tail.mean(axis=0)),
+                    np.mean(speeds[-last:]),
                 )
             )
     finally:
@@ -103,6 +119,7 @@ def main() -> int:
     a = np.array(rows, dtype=float)
     wall, success, collision, final = a[:, 0], a[:, 1], a[:, 2], a[:, 3]
     ends, nearer_block, end_time, offset = a[:, 4:6], a[:, 8], a[:, 9], a[:, 10]
+    tail_size, tail_net, tail_speed = a[:, 11], a[:, 12], a[:, 13]
     print(f"# {path}: {len(a)} evaluation arenas\n")
     print(f"success {success.mean():.0%}, collisions {collision.mean():.0%}\n")
     binned_table(
@@ -139,6 +156,21 @@ def main() -> int:
             f"{np.median([wall_distance(env, e) for e in ended]):.2f} m (goals': "
             f"{np.median(wall[failed]):.2f} m)"
         )
+        print(
+            f"\n| failed without a collision, over the last {LAST_SECONDS:g} s | arenas | final "
+            "distance (m) | mean abs(action) | abs(mean action) | speed (m/s) |\n|---|---:|---:|---:|---:|---:|"
+        )
+        short = final < SHORT_OF_GOAL
+        for name, sel in (
+            (f"short of the goal (< {SHORT_OF_GOAL:g} m)", failed & short),
+            ("stalled on the way", failed & ~short),
+        ):
+            if sel.any():
+                print(
+                    f"| {name} | {sel.sum()} | {np.median(final[sel]):.2f} | "
+                    f"{np.median(tail_size[sel]):.2f} | {np.median(tail_net[sel]):.2f} | "
+                    f"{np.median(tail_speed[sel]):.3f} |"
+                )
     acts = np.abs(np.array(actions))
     print(f"\nactions saturated (|a| > {SATURATED}): {np.mean(acts > SATURATED):.0%} of components")
     stats = noise_and_mean(model, np.array(observations))

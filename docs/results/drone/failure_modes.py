@@ -79,6 +79,7 @@ def main() -> int:
     norm = observation_normalizer(path) or (lambda obs: obs)
     env = CStepDroneEnv(empowered=False)
     rows, observations, actions = [], [], []
+    last = round(LAST_SECONDS * CONTROL_HZ)
     try:
         for config in configurations("drone")[: args.episodes]:
             obs, info = env.reset(options=reset_options("drone", config))
@@ -94,7 +95,6 @@ def main() -> int:
                 speeds.append(np.linalg.norm(env.sim.state().velocity[:2]))
                 done = terminated or truncated
             actions += flown
-            last = round(LAST_SECONDS * CONTROL_HZ)
             tail = np.array(flown[-last:])
             goal, end = env.sim.goal[:2], np.asarray(info["position"])
             nearer_block = rect_distance(*end, env.sim.arena.block) < wall_distance(env, end)

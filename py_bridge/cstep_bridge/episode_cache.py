@@ -3,7 +3,7 @@ new agent) flies only that model, and an evaluation interrupted part-way resumes
 
 An entry holds one model's episodes on one evaluation set, by configuration index. Its key is a
 digest of everything an episode depends on: the model's weights, the observation statistics it
-is normalised with, the environment, the evaluation set's contents, the source of every module of
+is normalised with, the environment, the evaluation set's contents, the acting rule, the source of every module of
 this package that the evaluation loads (simulation, envs, controller, metrics — not, say, the
 bag recorder), its data files, the drone's URDF and the versions of the libraries that fly and
 act (PyBullet, PyTorch, stable-baselines3, NumPy); any change to one of them makes a new key, so
@@ -26,7 +26,17 @@ from .resources import drone_urdf
 
 PACKAGE_DIR = Path(__file__).resolve().parent
 LIBRARIES = ("pybullet", "torch", "stable-baselines3", "numpy")
-FLYING_MODULES = ("flights", "envs", "env", "maze", "sim", "world", "normalization", "metrics")
+FLYING_MODULES = (
+    "flights",
+    "acting",
+    "envs",
+    "env",
+    "maze",
+    "sim",
+    "world",
+    "normalization",
+    "metrics",
+)
 """What an evaluation worker runs; the key covers these and every package module they import."""
 
 
@@ -43,15 +53,16 @@ def _evaluation_sources() -> list[Path]:
     return sorted(files)
 
 
-def entry_key(model: Path, env: str, eval_set: Path | None) -> str:
-    """The digest that names ``model``'s entry for ``env`` and ``eval_set`` (None: the env's
-    default set, itself part of the package's files when it is read from there)."""
+def entry_key(model: Path, env: str, eval_set: Path | None, acting: str) -> str:
+    """The digest that names ``model``'s entry for ``env``, ``eval_set`` (None: the env's default
+    set, itself part of the package's files when it is read from there) and the ``acting`` rule."""
     h = hashlib.sha256()
     for path in (model, stats_path(model), eval_set, drone_urdf()):
         if path is not None and path.exists():
             h.update(path.read_bytes())
         h.update(b"\0")
     h.update(env.encode())
+    h.update(acting.encode())
     h.update(" ".join(version(lib) for lib in LIBRARIES).encode())
     for source in _evaluation_sources():
         h.update(str(source.relative_to(PACKAGE_DIR)).encode())

@@ -7,7 +7,8 @@ Models with the same label (``--label``, or by default the agent and its c from 
 ``unempowered``, ``empowered c=0.5``) are one agent trained with several seeds. Every model flies
 every configuration of the environment's fixed evaluation set (the drone: the 100 arenas of
 ``data/drone_eval_set.json``; the maze: its 18 start × goal combinations) with its deterministic
-policy. Evaluation needs no reward, so no ``cstep node`` runs. ``--cache DIR`` keeps each
+policy, acting by its mode or its expected action (``--action``, :mod:`cstep_bridge.acting`).
+Evaluation needs no reward, so no ``cstep node`` runs. ``--cache DIR`` keeps each
 model's episodes (:mod:`cstep_bridge.episode_cache`): a re-run flies only what it lacks.
 Writes to ``--out``:
 
@@ -40,6 +41,7 @@ from pathlib import Path
 import numpy as np
 
 from . import comparison, metrics, paper_results, training_log
+from .acting import ACTING_RULES, DEFAULT_ACTING_RULE
 from .envs import ENV_NAMES
 from .episode_cache import EpisodeCache
 from .flights import configurations, fly_model
@@ -364,6 +366,13 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         "(default: that file, the committed 100 arenas)",
     )
     ap.add_argument("--episodes", type=int, help="only the first N configurations")
+    ap.add_argument(
+        "--action",
+        choices=ACTING_RULES,
+        default=DEFAULT_ACTING_RULE,
+        help="how the trained policy acts: its mode (SB3's deterministic action) or its expected "
+        "action under its own noise (docs/results/protocol.md, e01; default: %(default)s)",
+    )
     ap.add_argument("--jobs", type=int, default=1, help="worker processes per agent")
     ap.add_argument(
         "--cache",
@@ -402,9 +411,13 @@ def main(argv: list[str] | None = None) -> int:
     for label, seeds in groups.items():
         runs[label] = []
         for model in seeds:
-            print(f"{label}: {len(indices)} episodes on {env} ({model.model})", flush=True)
+            print(
+                f"{label}: {len(indices)} episodes on {env}, acting by its {args.action} "
+                f"({model.model})",
+                flush=True,
+            )
             runs[label].append(
-                fly_model(model.model, env, indices, args.jobs, args.eval_set, cache)
+                fly_model(model.model, env, indices, args.jobs, args.eval_set, cache, args.action)
             )
             s = metrics.summarize(runs[label][-1], line)
             print(
@@ -448,6 +461,7 @@ def main(argv: list[str] | None = None) -> int:
             {
                 "env": env,
                 "command": command,
+                "action": args.action,
                 "baseline": base_label,
                 "summaries": {k: asdict(v) for k, v in summaries.items()},
                 "intervals": {

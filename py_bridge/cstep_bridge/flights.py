@@ -1,10 +1,10 @@
 """Flying trained models over an evaluation set: the episodes :mod:`~cstep_bridge.evaluate`
 tables, the validation of :mod:`~cstep_bridge.selection` and the analysis scripts measure.
 
-Every configuration is flown with the deterministic policy from ``reset(seed=index)``, so an
-episode depends only on the model, its observation normaliser, the configuration and the code
-that flies it (this module, the envs, the simulation): what
-:mod:`~cstep_bridge.episode_cache` keys its entries on.
+Every configuration is flown with a deterministic policy (by one of :mod:`~cstep_bridge.acting`'s
+rules) from ``reset(seed=index)``, so an episode depends only on the model, its observation
+normaliser, the acting rule, the configuration and the code that flies it (this module, the envs,
+the simulation): what :mod:`~cstep_bridge.episode_cache` keys its entries on.
 """
 
 from __future__ import annotations
@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 
 from . import metrics
+from .acting import DEFAULT_ACTING_RULE, actor
 from .envs import make_env
 from .episode_cache import EpisodeCache, entry_key
 
@@ -44,10 +45,18 @@ def reset_options(env: str, config: Any) -> dict[str, Any]:
 
 
 def fly_episodes(
-    model, env, env_name: str, configs: list[Any], ids: list[int], normalize_obs=None
+    model,
+    env,
+    env_name: str,
+    configs: list[Any],
+    ids: list[int],
+    normalize_obs=None,
+    acting: str = DEFAULT_ACTING_RULE,
 ) -> list[metrics.Episode]:
     """Flies each of ``configs`` (numbered ``ids``) in ``env`` with ``model``'s deterministic
-    policy; ``normalize_obs`` maps raw observations to the policy's input, if it needs that."""
+    policy under the ``acting`` rule; ``normalize_obs`` maps raw observations to the policy's
+    input, if it needs that."""
+    act = actor(model, acting)
     radius = env.unwrapped.robot_radius
     dt = env.unwrapped.control_period
     route_taken = None
@@ -59,8 +68,7 @@ def fly_episodes(
         xy, gap, done = [], [], False
         while not done:
             x = obs if normalize_obs is None else normalize_obs(obs)
-            action, _ = model.predict(x, deterministic=True)
-            obs, _, terminated, truncated, info = env.step(action)
+            obs, _, terminated, truncated, info = env.step(act(x))
             xy.append(info["position"])
             gap.append(info["min_obstacle_distance"] - radius)
             done = terminated or truncated
@@ -79,9 +87,14 @@ def fly_episodes(
 
 
 def fly(
-    model_path: Path, env_name: str, indices: list[int], eval_set: Path | None = None
+    model_path: Path,
+    env_name: str,
+    indices: list[int],
+    eval_set: Path | None = None,
+    acting: str = DEFAULT_ACTING_RULE,
 ) -> list[metrics.Episode]:
-    """Flies configurations ``indices`` with the deterministic policy (in a worker process)."""
+    """Flies configurations ``indices`` with the deterministic policy under the ``acting`` rule
+    (in a worker process)."""
     import torch
     from stable_baselines3 import PPO
 
@@ -99,6 +112,7 @@ def fly(
             [configs[i] for i in indices],
             indices,
             observation_normalizer(model_path),
+            acting,
         )
     finally:
         env.close()
@@ -111,11 +125,12 @@ def fly_model(
     jobs: int,
     eval_set: Path | None = None,
     cache: EpisodeCache | None = None,
+    acting: str = DEFAULT_ACTING_RULE,
 ) -> list[metrics.Episode]:
-    """Configurations ``indices`` flown by the model at ``model``, over ``jobs`` worker processes;
-    with a ``cache``, only those it does not hold yet, each chunk of :data:`CHUNK` stored as soon
-    as it is flown."""
-    key = entry_key(model, env, eval_set) if cache else ""
+    """Configurations ``indices`` flown by the model at ``model`` under the ``acting`` rule, over
+    ``jobs`` worker processes; with a ``cache``, only those it does not hold yet, each chunk of
+    :data:`CHUNK` stored as soon as it is flown."""
+    key = entry_key(model, env, eval_set, acting) if cache else ""
     done = cache.load(key) if cache else {}
     missing = [i for i in indices if i not in done]
     if cache and len(missing) < len(indices):
@@ -127,7 +142,7 @@ def fly_model(
         k = min(jobs, len(chunks))
         with ProcessPoolExecutor(k, mp_context=get_context("spawn")) as pool:
             n = len(chunks)
-            for part in pool.map(fly, [model] * n, [env] * n, chunks, [eval_set] * n):
+            for part in pool.map(fly, [model] * n, [env] * n, chunks, [eval_set] * n, [acting] * n):
                 done.update((e.config, e) for e in part)
                 if cache:
                     cache.store(key, done)

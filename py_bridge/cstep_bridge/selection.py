@@ -3,7 +3,7 @@ but scored by the task's success rate rather than by the reward, so that it sele
 empowered or not, by the same measure).
 
 Every ``every`` training steps the current policy flies ``episodes`` validation configurations
-deterministically, in an unempowered env (flying needs no reward, so no node); the model with the
+deterministically, acting by the ``action`` rule (:mod:`~cstep_bridge.acting`), in an unempowered env (flying needs no reward, so no node); the model with the
 highest validation success rate so far (ties: fewer collisions, then the earlier) is saved as
 ``best_model.zip``. Each validation is appended to ``validation.csv`` and logged to TensorBoard.
 
@@ -12,7 +12,7 @@ Validation sets: the drone flies arenas drawn with :data:`DRONE_SEED` (the evalu
 configurations, so its validation starts and goals are drawn uniformly within ±0.3 m of the
 centres of those cells instead.
 
-Configured by a protocol's ``validation`` entry: ``{every: 50000, episodes: 40}``.
+Configured by a protocol's ``validation`` entry: ``{every: 50000, episodes: 40, action: mode}``.
 """
 
 from __future__ import annotations
@@ -24,6 +24,7 @@ from typing import Any
 
 import numpy as np
 
+from .acting import DEFAULT_ACTING_RULE, check_rule
 from .training_log import VALIDATION_CSV
 
 DRONE_SEED = 7_331
@@ -36,20 +37,25 @@ MAZE_JITTER = 0.3
 
 @dataclass(frozen=True)
 class Validation:
-    """How often and on how many configurations to validate."""
+    """How often, on how many configurations and acting by which rule to validate."""
 
     every: int
     episodes: int
+    action: str = DEFAULT_ACTING_RULE
 
     @classmethod
     def from_settings(cls, value: dict[str, Any] | None) -> Validation | None:
         """The validation of a run's ``validation`` setting; None when it has none."""
         if not value:
             return None
-        unknown = set(value) - {"every", "episodes"}
+        unknown = set(value) - {"every", "episodes", "action"}
         if unknown:
             raise ValueError(f"validation: unknown keys {sorted(unknown)}")
-        v = cls(int(value.get("every", 50_000)), int(value.get("episodes", 40)))
+        try:
+            action = check_rule(value.get("action", DEFAULT_ACTING_RULE))
+        except ValueError as err:
+            raise ValueError(f"validation: {err}") from err
+        v = cls(int(value.get("every", 50_000)), int(value.get("episodes", 40)), action)
         if v.every <= 0 or v.episodes <= 0:
             raise ValueError("validation: every and episodes must be > 0")
         return v
@@ -75,12 +81,20 @@ def validation_set(env: str, size: int) -> list[Any]:
     return out
 
 
-def fly_validation(model, env, env_name: str, configs: list[Any], normalize_obs=None):
+def fly_validation(
+    model,
+    env,
+    env_name: str,
+    configs: list[Any],
+    normalize_obs=None,
+    acting: str = DEFAULT_ACTING_RULE,
+):
     """Success and collision rates and mean episode length (steps) of ``model``'s deterministic
-    policy on ``configs`` in ``env``."""
+    policy, acting by the ``acting`` rule, on ``configs`` in ``env``."""
     from .flights import fly_episodes
 
-    episodes = fly_episodes(model, env, env_name, configs, list(range(len(configs))), normalize_obs)
+    ids = list(range(len(configs)))
+    episodes = fly_episodes(model, env, env_name, configs, ids, normalize_obs, acting)
     return {
         "success_rate": float(np.mean([e.success for e in episodes])),
         "collision_rate": float(np.mean([e.collision for e in episodes])),
@@ -117,7 +131,9 @@ def make_callback(env_name: str, validation: Validation, out: Path):
             norm = venv.normalize_obs if isinstance(venv, VecNormalize) and venv.norm_obs else None
             env = make_env(env_name, empowered=False)
             try:
-                result = fly_validation(self.model, env, env_name, self.configs, norm)
+                result = fly_validation(
+                    self.model, env, env_name, self.configs, norm, validation.action
+                )
             finally:
                 env.close()
             key = (result["success_rate"], -result["collision_rate"])

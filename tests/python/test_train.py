@@ -281,3 +281,9 @@ def test_evaluation_cache_flies_only_the_episodes_it_lacks(drone_run, tmp_path):
                "--out", str(tmp_path / "c"))  # fmt: skip
     assert "from the cache" not in proc.stdout
     assert len(list(cache.glob("*.pkl"))) == 2
+    # So is another acting rule: the same model acting by its expected action flies anew.
+    proc = run("evaluate", *model, "--episodes", "1", "--cache", str(cache), "--action", "mean",
+               "--out", str(tmp_path / "d"))  # fmt: skip
+    assert "from the cache" not in proc.stdout and "acting by its mean" in proc.stdout
+    assert json.loads((tmp_path / "d" / "results.json").read_text())["action"] == "mean"
+    assert len(list(cache.glob("*.pkl"))) == 3

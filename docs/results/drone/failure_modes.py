@@ -1,5 +1,5 @@
-"""Where does a drone policy fail, and how does it act? Flies a model's deterministic policy on the
-evaluation arenas and reports success by how close the goal lies to a wall, how many collisions
+"""Where does a drone policy fail, and how does it act? Flies a model's deterministic policy (acting
+by its mode or its expected action: ``--action``, ``cstep_bridge.acting``) on the evaluation arenas and reports success by how close the goal lies to a wall, how many collisions
 were with the block, where the failed episodes ended, and how saturated the actions are (for a
 tanh-squashed gSDE policy also the size of its pre-squash mean and exploration noise), success
 and collisions by the start's offset from the block's centre line (is the block straight ahead?),
@@ -20,6 +20,7 @@ import itertools
 from pathlib import Path
 
 import numpy as np
+from cstep_bridge.acting import ACTING_RULES, DEFAULT_ACTING_RULE, actor
 from cstep_bridge.env import CStepDroneEnv
 from cstep_bridge.flights import configurations, reset_options
 from cstep_bridge.noise_cap import state_noise
@@ -73,9 +74,11 @@ def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--model", type=Path, required=True, help="a run or model directory, or .zip")
     ap.add_argument("--episodes", type=int, default=100)
+    ap.add_argument("--action", choices=ACTING_RULES, default=DEFAULT_ACTING_RULE)
     args = ap.parse_args()
     path = args.model / "model.zip" if args.model.is_dir() else args.model
     model = PPO.load(path, device="cpu")
+    act = actor(model, args.action)
     norm = observation_normalizer(path) or (lambda obs: obs)
     env = CStepDroneEnv(empowered=False)
     rows, observations, actions = [], [], []
@@ -88,7 +91,7 @@ def main() -> int:
             flown, speeds = [], []
             while not done:
                 o = norm(obs)
-                action = model.predict(o, deterministic=True)[0]
+                action = act(o)
                 observations.append(o)
                 flown.append(action)
                 obs, _, terminated, truncated, info = env.step(action)
@@ -120,7 +123,7 @@ def main() -> int:
     wall, success, collision, final = a[:, 0], a[:, 1], a[:, 2], a[:, 3]
     ends, nearer_block, end_time, offset = a[:, 4:6], a[:, 8], a[:, 9], a[:, 10]
     tail_size, tail_net, tail_speed = a[:, 11], a[:, 12], a[:, 13]
-    print(f"# {path}: {len(a)} evaluation arenas\n")
+    print(f"# {path}: {len(a)} evaluation arenas, acting by its {args.action}\n")
     print(f"success {success.mean():.0%}, collisions {collision.mean():.0%}\n")
     binned_table(
         "| goal's distance to a wall (m) | arenas | success | median final distance (m) |",

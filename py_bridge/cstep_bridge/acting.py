@@ -1,0 +1,67 @@
+"""How a trained policy acts when it is flown for validation or evaluation (not in training, where
+PPO samples): one deterministic action per observation, by one of two rules.
+
+- ``mode``: SB3's ``predict(deterministic=True)`` — the mean of the pre-squash Gaussian N(μ, s²),
+  squashed (``tanh(μ)``) or clipped to the action box.
+- ``mean``: the *expected* action the policy takes, ``E[tanh(X)]`` (squashed) or ``E[clip(X)]``
+  (unsquashed, as the env clips it), X ~ N(μ, s²) per action component, with s the policy's own
+  action noise at that state (gSDE's state-dependent std, or the state-independent one).
+
+The two differ when s is large against |μ|: a squashed gSDE policy at the end of training carries
+s ≈ 2 against |μ| ≈ 3.5, so ``tanh(μ)`` saturates where the policy PPO trained acts, on average,
+far more gently; the mode is then a high-gain version of the trained behaviour, which chatters in
+limit cycles behind the waypoint controller's lag (docs/results/protocol.md, e01). Neither SB3 nor
+rl-zoo offers the expected action, so it is computed here: the mean of the action at
+:data:`QUANTILES` equally spaced quantiles of X. Both integrands are monotone in X and span at
+most 2, so that mean is within 2 / :data:`QUANTILES` of the expectation whatever s is (a
+Gauss–Hermite rule is not: at s ≫ 1, tanh(X) is nearly a step its nodes straddle).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+
+ACTING_RULES = ("mode", "mean")
+"""The rules a trained policy can act by (see the module docstring)."""
+DEFAULT_ACTING_RULE = "mode"
+"""The rule when none is named: SB3's, the convention of every earlier result."""
+QUANTILES = 2_000
+"""Quantiles of the pre-squash Gaussian the expected action is averaged over (error ≤ 0.001)."""
+
+Actor = Callable[[np.ndarray], np.ndarray]
+"""A deterministic policy: the action for one observation, as the policy sees it."""
+
+
+def check_rule(rule: str) -> str:
+    """``rule`` if it is one of :data:`ACTING_RULES`; a clear error otherwise."""
+    if rule not in ACTING_RULES:
+        raise ValueError(f"acting rule must be one of {ACTING_RULES}, not {rule!r}")
+    return rule
+
+
+def actor(model, rule: str = DEFAULT_ACTING_RULE) -> Actor:
+    """``model``'s deterministic policy under ``rule``."""
+    if check_rule(rule) == "mode":
+        return lambda obs: model.predict(obs, deterministic=True)[0]
+    return lambda obs: expected_action(model.policy, obs)
+
+
+def expected_action(policy, obs: np.ndarray) -> np.ndarray:
+    """The expected action of SB3 actor-critic ``policy`` for one observation ``obs``, in the
+    env's action units: ``E[tanh(X)]`` rescaled to the box for a squashed policy, ``E[clip(X)]``
+    otherwise, X ~ N(μ, s²) per component."""
+    import torch
+    from scipy.special import ndtri
+
+    z = ndtri((np.arange(QUANTILES) + 0.5) / QUANTILES)
+    with torch.no_grad():
+        tensor, _ = policy.obs_to_tensor(obs)
+        normal = policy.get_distribution(tensor).distribution
+        mu, s = normal.loc.numpy()[0], normal.scale.numpy()[0]
+    x = mu[:, None] + s[:, None] * z[None, :]
+    if policy.squash_output:
+        return policy.unscale_action(np.tanh(x).mean(axis=1).astype(np.float32))
+    low, high = policy.action_space.low, policy.action_space.high
+    return np.clip(x, low[:, None], high[:, None]).mean(axis=1).astype(np.float32)

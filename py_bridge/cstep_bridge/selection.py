@@ -13,18 +13,33 @@ configurations, so its validation starts and goals are drawn uniformly within ±
 centres of those cells instead.
 
 Configured by a protocol's ``validation`` entry: ``{every: 50000, episodes: 40, action: mode}``.
+
+A finished run can be selected again under another acting rule, from the checkpoints it saved at
+the same steps as it validated::
+
+    python -m cstep_bridge.selection runs/NAME --action mean --jobs 2
+
+flies every ``checkpoints/ppo_<N>_steps.zip`` on the run's validation set acting by that rule and
+writes ``validation-<rule>.csv`` (the columns of ``validation.csv``) and ``best_model-<rule>.zip``
+(with its normaliser statistics) beside the run's own.
 """
 
 from __future__ import annotations
 
+import argparse
 import csv
+import json
+import re
+import shutil
+from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
+from multiprocessing import get_context
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from .acting import DEFAULT_ACTING_RULE, check_rule
+from .acting import ACTING_RULES, DEFAULT_ACTING_RULE, check_rule
 from .training_log import VALIDATION_CSV
 
 DRONE_SEED = 7_331
@@ -33,6 +48,21 @@ MAZE_SEED = 7_332
 """Seed of the maze's perturbed validation configurations."""
 MAZE_JITTER = 0.3
 """Half-width (m) of the square around a cell centre in which maze validation points lie."""
+
+
+CSV_COLUMNS = ("steps", "success_rate", "collision_rate", "mean_length", "best")
+"""The columns of ``validation.csv``: one row per validation."""
+
+
+def csv_row(steps: int, result: dict[str, float], improved: bool) -> list:
+    """The ``validation.csv`` row of one validation at ``steps`` (``improved``: the best so far)."""
+    return [
+        steps,
+        f"{result['success_rate']:.4f}",
+        f"{result['collision_rate']:.4f}",
+        f"{result['mean_length']:.1f}",
+        int(improved),
+    ]
 
 
 @dataclass(frozen=True)
@@ -147,16 +177,8 @@ def make_callback(env_name: str, validation: Validation, out: Path):
             with log.open("a", newline="") as f:
                 w = csv.writer(f)
                 if new:
-                    w.writerow(["steps", "success_rate", "collision_rate", "mean_length", "best"])
-                w.writerow(
-                    [
-                        self.num_timesteps,
-                        f"{result['success_rate']:.4f}",
-                        f"{result['collision_rate']:.4f}",
-                        f"{result['mean_length']:.1f}",
-                        int(improved),
-                    ]
-                )
+                    w.writerow(CSV_COLUMNS)
+                w.writerow(csv_row(self.num_timesteps, result, improved))
             for k, v in result.items():
                 self.logger.record(f"validation/{k}", v)
             print(
@@ -177,3 +199,92 @@ def _best_so_far(log: Path) -> tuple[float, float] | None:
         rows = list(csv.DictReader(f))
     keys = [(float(r["success_rate"]), -float(r["collision_rate"])) for r in rows]
     return max(keys) if keys else None
+
+
+def validate_checkpoint(path: Path, env_name: str, episodes: int, acting: str) -> dict:
+    """The validation result of the model saved at ``path`` (in a worker process)."""
+    import torch
+    from stable_baselines3 import PPO
+
+    from .envs import make_env
+    from .normalization import observation_normalizer
+
+    torch.set_num_threads(1)
+    model = PPO.load(path, device="cpu")
+    env = make_env(env_name, empowered=False)
+    try:
+        configs = validation_set(env_name, episodes)
+        return fly_validation(model, env, env_name, configs, observation_normalizer(path), acting)
+    finally:
+        env.close()
+
+
+def checkpoints(run: Path) -> list[tuple[int, Path]]:
+    """The run's ``checkpoints/ppo_<N>_steps.zip`` by step count."""
+    found = []
+    for path in (run / "checkpoints").glob("ppo_*_steps.zip"):
+        m = re.fullmatch(r"ppo_(\d+)_steps\.zip", path.name)
+        if m:
+            found.append((int(m.group(1)), path))
+    return sorted(found)
+
+
+def reselect(run: Path, acting: str, jobs: int) -> Path:
+    """Validates every checkpoint of ``run`` acting by ``acting``; writes
+    ``validation-<acting>.csv`` and ``best_model-<acting>.zip`` (see the module docstring) and
+    returns the latter."""
+    from .normalization import stats_path
+
+    settings = json.loads((run / "run.json").read_text())
+    validation = Validation.from_settings(settings.get("validation")) or Validation(50_000, 40)
+    found = checkpoints(run)
+    if not found:
+        raise SystemExit(f"{run}: no checkpoints/ppo_<N>_steps.zip to select from")
+    env_name, n = settings["env"], len(found)
+    print(f"{run}: {n} checkpoints, {validation.episodes} validation episodes each, "
+          f"acting by its {acting}", flush=True)  # fmt: skip
+    best, best_key, rows = None, None, []
+    with ProcessPoolExecutor(min(jobs, n), mp_context=get_context("spawn")) as pool:
+        paths = [p for _, p in found]
+        results = pool.map(
+            validate_checkpoint, paths, [env_name] * n, [validation.episodes] * n, [acting] * n
+        )
+        for (steps, path), result in zip(found, results, strict=True):
+            key = (result["success_rate"], -result["collision_rate"])
+            improved = best_key is None or key > best_key
+            if improved:
+                best, best_key = path, key
+            rows.append(csv_row(steps, result, improved))
+            print(f"  {steps}: success {result['success_rate']:.0%}, collisions "
+                  f"{result['collision_rate']:.0%}{' (best so far)' if improved else ''}",
+                  flush=True)  # fmt: skip
+    with (run / f"validation-{acting}.csv").open("w", newline="") as f:
+        csv.writer(f).writerows([CSV_COLUMNS, *rows])
+    chosen = run / f"best_model-{acting}.zip"
+    shutil.copyfile(best, chosen)
+    if stats_path(best).exists():
+        shutil.copyfile(stats_path(best), stats_path(chosen))
+    print(f"best: {best.name} -> {chosen}", flush=True)
+    return chosen
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point of ``python -m cstep_bridge.selection``."""
+    ap = argparse.ArgumentParser(
+        prog="python -m cstep_bridge.selection",
+        description="Select a finished run's best checkpoint again, acting by another rule.",
+    )
+    ap.add_argument("run", type=Path, help="a run directory with run.json and checkpoints/")
+    ap.add_argument("--action", choices=ACTING_RULES, required=True, help="the acting rule")
+    ap.add_argument("--jobs", type=int, default=1, help="worker processes")
+    args = ap.parse_args(argv)
+    if args.jobs <= 0:
+        ap.error("--jobs must be > 0")
+    if not (args.run / "run.json").exists():
+        ap.error(f"{args.run}: not a run directory (no run.json)")
+    reselect(args.run, args.action, args.jobs)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

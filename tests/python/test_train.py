@@ -287,3 +287,24 @@ def test_evaluation_cache_flies_only_the_episodes_it_lacks(drone_run, tmp_path):
     assert "from the cache" not in proc.stdout and "acting by its mean" in proc.stdout
     assert json.loads((tmp_path / "d" / "results.json").read_text())["action"] == "mean"
     assert len(list(cache.glob("*.pkl"))) == 3
+
+
+def test_a_finished_run_is_selected_again_under_another_acting_rule(drone_run, tmp_path):
+    run_dir = tmp_path / "run"
+    shutil.copytree(drone_run, run_dir)
+    settings = json.loads((run_dir / "run.json").read_text())
+    settings["validation"] = {"every": 64, "episodes": 1}
+    (run_dir / "run.json").write_text(json.dumps(settings))
+    proc = run("selection", str(run_dir), "--action", "mean")
+    assert "3 checkpoints, 1 validation episodes each, acting by its mean" in proc.stdout
+    rows = (run_dir / "validation-mean.csv").read_text().splitlines()
+    assert rows[0] == "steps,success_rate,collision_rate,mean_length,best"
+    assert [r.split(",")[0] for r in rows[1:]] == ["64", "128", "192"]
+    assert rows[1].endswith(",1")  # the first checkpoint is the best so far
+    last_best = [r.split(",")[0] for r in rows[1:] if r.endswith(",1")][-1]
+    chosen = run_dir / "best_model-mean.zip"
+    picked = run_dir / "checkpoints" / f"ppo_{last_best}_steps.zip"
+    assert chosen.read_bytes() == picked.read_bytes()
+    assert PPO.load(chosen, device="cpu").num_timesteps == int(last_best)
+    proc = run("selection", str(tmp_path), "--action", "mean", ok=False)
+    assert "not a run directory" in proc.stderr

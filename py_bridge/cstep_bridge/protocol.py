@@ -44,6 +44,7 @@ _DEFAULTS: dict[str, Any] = {
     "learning_rate": 3e-4,
     "use_sde": False,
     "sde_sample_freq": -1,
+    "sde_learn_features": False,
     "normalize": False,
     "policy_kwargs": {},
     "collision_value": "none",
@@ -69,6 +70,7 @@ SETTING_NAMES = (
     "target_kl",
     "use_sde",
     "sde_sample_freq",
+    "sde_learn_features",
     "squash_output",
     "use_expln",
     "norm_obs",
@@ -137,6 +139,7 @@ def settings(hyper: dict[str, Any]) -> dict[str, Any]:
         "target_kl": None if hyper["target_kl"] is None else float(hyper["target_kl"]),
         "use_sde": bool(hyper["use_sde"]),
         "sde_sample_freq": int(hyper["sde_sample_freq"]),
+        "sde_learn_features": bool(hyper["sde_learn_features"]),
         "squash_output": bool(policy.get("squash_output", False)),
         "use_expln": bool(policy.get("use_expln", False)),
         "norm_obs": bool(normalize.get("norm_obs", False)),
@@ -161,6 +164,8 @@ def check(s: dict[str, Any]) -> None:
     for name in ("squash_output", "use_expln"):
         if s.get(name) and not s["use_sde"]:
             raise ValueError(f"policy_kwargs.{name} needs use_sde (SB3 has it for gSDE only)")
+    if s.get("sde_learn_features") and not s["use_sde"]:
+        raise ValueError("sde_learn_features needs use_sde (it trains gSDE's noise features)")
     if s.get("noise_cap") and not s["use_sde"]:
         raise ValueError("noise_cap needs use_sde (it caps gSDE's exploration noise)")
     if s["lr_schedule"] not in ("constant", "linear"):

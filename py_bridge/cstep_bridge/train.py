@@ -396,11 +396,23 @@ def _learning_rate(settings: dict[str, Any]):
     return lr
 
 
+def learn_sde_features(model, settings: dict[str, Any]):
+    """``model`` with gSDE's noise features trained when the run's ``sde_learn_features`` says so:
+    the policy gradient then reaches the policy's latent through the noise's state-dependent std
+    too, so the policy can learn where to explore less (near walls, say) rather than only how
+    much overall. SB3's ActorCriticPolicy fixes gSDE's ``learn_features`` to False in its
+    constructor and reads it only when it builds each distribution, so it is set here, after
+    building or loading, and not saved with the model: a resumed run sets it again."""
+    if settings.get("sde_learn_features"):
+        model.policy.action_dist.learn_features = True
+    return model
+
+
 def build_model(settings: dict[str, Any], venv, device: str = "cpu", tensorboard_log=None):
     """A new PPO model with a run's settings on ``venv``."""
     from stable_baselines3 import PPO
 
-    return PPO(
+    model = PPO(
         "MlpPolicy",
         venv,
         learning_rate=_learning_rate(settings),
@@ -421,6 +433,7 @@ def build_model(settings: dict[str, Any], venv, device: str = "cpu", tensorboard
         device=device,
         verbose=0,
     )
+    return learn_sde_features(model, settings)
 
 
 def load_settings(out: Path) -> dict[str, Any]:
@@ -482,7 +495,9 @@ def train(args: argparse.Namespace) -> Path:
             )
     try:
         if resume_from is not None:
-            model = PPO.load(resume_from, env=vec_env, device=args.device)
+            model = learn_sde_features(
+                PPO.load(resume_from, env=vec_env, device=args.device), settings
+            )
             print(f"resuming {out} from {resume_from.name} at step {model.num_timesteps}")
         else:
             model = build_model(settings, vec_env, args.device, out / "tb")

@@ -13,8 +13,9 @@ far more gently; the mode is then a high-gain version of the trained behaviour, 
 limit cycles behind the waypoint controller's lag (docs/results/protocol.md, e01). Neither SB3 nor
 rl-zoo offers the expected action, so it is computed here: the mean of the action at
 :data:`QUANTILES` equally spaced quantiles of X. Both integrands are monotone in X and span at
-most 2, so that mean is within 2 / :data:`QUANTILES` of the expectation whatever s is (a
-Gauss–Hermite rule is not: at s ≫ 1, tanh(X) is nearly a step its nodes straddle).
+most the action box's width (2 for the drone's and the maze's [−1, 1]), so that mean is within
+width / :data:`QUANTILES` of the expectation whatever s is (a Gauss–Hermite rule is not: at
+s ≫ 1, tanh(X) is nearly a step its nodes straddle).
 """
 
 from __future__ import annotations
@@ -28,7 +29,8 @@ ACTING_RULES = ("mode", "mean")
 DEFAULT_ACTING_RULE = "mode"
 """The rule when none is named: SB3's, the convention of every earlier result."""
 QUANTILES = 2_000
-"""Quantiles of the pre-squash Gaussian the expected action is averaged over (error ≤ 0.001)."""
+"""Quantiles of the pre-squash Gaussian the expected action is averaged over (error ≤ 0.001 on
+a [−1, 1] box)."""
 
 Actor = Callable[[np.ndarray], np.ndarray]
 """A deterministic policy: the action for one observation, as the policy sees it."""
@@ -49,17 +51,19 @@ def actor(model, rule: str = DEFAULT_ACTING_RULE) -> Actor:
 
 
 def expected_action(policy, obs: np.ndarray) -> np.ndarray:
-    """The expected action of SB3 actor-critic ``policy`` for one observation ``obs``, in the
-    env's action units: ``E[tanh(X)]`` rescaled to the box for a squashed policy, ``E[clip(X)]``
-    otherwise, X ~ N(μ, s²) per component."""
+    """The expected action of SB3 actor-critic ``policy`` for one observation ``obs`` (not a
+    batch), in the env's action units: ``E[tanh(X)]`` rescaled to the box for a squashed policy,
+    ``E[clip(X)]`` otherwise, X ~ N(μ, s²) per component."""
     import torch
     from scipy.special import ndtri
 
     z = ndtri((np.arange(QUANTILES) + 0.5) / QUANTILES)
     with torch.no_grad():
-        tensor, _ = policy.obs_to_tensor(obs)
+        tensor, vectorized = policy.obs_to_tensor(obs)
+        if vectorized:
+            raise ValueError(f"expected_action takes one observation, not a batch of {len(obs)}")
         normal = policy.get_distribution(tensor).distribution
-        mu, s = normal.loc.numpy()[0], normal.scale.numpy()[0]
+        mu, s = normal.loc.cpu().numpy()[0], normal.scale.cpu().numpy()[0]
     x = mu[:, None] + s[:, None] * z[None, :]
     if policy.squash_output:
         return policy.unscale_action(np.tanh(x).mean(axis=1).astype(np.float32))

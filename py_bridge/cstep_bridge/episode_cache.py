@@ -3,12 +3,12 @@ new agent) flies only that model, and an evaluation interrupted part-way resumes
 
 An entry holds one model's episodes on one evaluation set, by configuration index. Its key is a
 digest of everything an episode depends on: the model's weights, the observation statistics it
-is normalised with, the environment, the evaluation set's contents, the acting rule, the source of every module of
-this package that the evaluation loads (simulation, envs, controller, metrics — not, say, the
-bag recorder), its data files, the drone's URDF and the versions of the libraries that fly and
-act (PyBullet, PyTorch, stable-baselines3, NumPy); any change to one of them makes a new key, so
-a stale entry is never read. Entries are pickles: the cache is a directory of the user's own files, not a format
-to exchange.
+is normalised with, the environment, the evaluation set's contents, the acting rule, the source
+of every module of this package that the evaluation loads (simulation, envs, controller, metrics
+— not, say, the bag recorder), its data files, the drone's URDF and the versions of the
+libraries that fly and act (PyBullet, PyTorch, stable-baselines3, NumPy, SciPy); any change to
+one of them makes a new key, so a stale entry is never read. Entries are pickles: the cache is a
+directory of the user's own files, not a format to exchange.
 """
 
 from __future__ import annotations
@@ -25,7 +25,7 @@ from .normalization import stats_path
 from .resources import drone_urdf
 
 PACKAGE_DIR = Path(__file__).resolve().parent
-LIBRARIES = ("pybullet", "torch", "stable-baselines3", "numpy")
+LIBRARIES = ("pybullet", "torch", "stable-baselines3", "numpy", "scipy")
 FLYING_MODULES = (
     "flights",
     "acting",
@@ -61,8 +61,8 @@ def entry_key(model: Path, env: str, eval_set: Path | None, acting: str) -> str:
         if path is not None and path.exists():
             h.update(path.read_bytes())
         h.update(b"\0")
-    h.update(env.encode())
-    h.update(acting.encode())
+    h.update(env.encode() + b"\0")
+    h.update(acting.encode() + b"\0")
     h.update(" ".join(version(lib) for lib in LIBRARIES).encode())
     for source in _evaluation_sources():
         h.update(str(source.relative_to(PACKAGE_DIR)).encode())

@@ -3,7 +3,8 @@ but scored by the task's success rate rather than by the reward, so that it sele
 empowered or not, by the same measure).
 
 Every ``every`` training steps the current policy flies ``episodes`` validation configurations
-deterministically, acting by the ``action`` rule (:mod:`~cstep_bridge.acting`), in an unempowered env (flying needs no reward, so no node); the model with the
+deterministically, acting by the ``action`` rule (:mod:`~cstep_bridge.acting`), in an
+unempowered env (flying needs no reward, so no node); the model with the
 highest validation success rate so far (ties: fewer collisions, then the earlier) is saved as
 ``best_model.zip``. Each validation is appended to ``validation.csv`` and logged to TensorBoard.
 
@@ -14,14 +15,15 @@ centres of those cells instead.
 
 Configured by a protocol's ``validation`` entry: ``{every: 50000, episodes: 40, action: mode}``.
 
-A finished run can be selected again under another acting rule, from the checkpoints it saved at
-the same steps as it validated::
+A finished run can be selected again under another acting rule::
 
     python -m cstep_bridge.selection runs/NAME --action mean --jobs 2
 
-flies every ``checkpoints/ppo_<N>_steps.zip`` on the run's validation set acting by that rule and
-writes ``validation-<rule>.csv`` (the columns of ``validation.csv``) and ``best_model-<rule>.zip``
-(with its normaliser statistics) beside the run's own.
+flies the checkpoints saved at the steps the run validated at (``checkpoints/ppo_<N>_steps.zip``
+for each N in its ``validation.csv``; with the defaults, ``--checkpoint-every`` and ``every`` are
+both 50 k) on the run's validation set acting by that rule, and writes ``validation-<rule>.csv``
+(the columns of ``validation.csv``) and ``best_model-<rule>.zip`` (with its normaliser
+statistics) beside the run's own.
 """
 
 from __future__ import annotations
@@ -29,7 +31,6 @@ from __future__ import annotations
 import argparse
 import csv
 import json
-import re
 import shutil
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
@@ -63,6 +64,12 @@ def csv_row(steps: int, result: dict[str, float], improved: bool) -> list:
         f"{result['mean_length']:.1f}",
         int(improved),
     ]
+
+
+def selection_key(result: dict) -> tuple[float, float]:
+    """What ranks validations (a result, or a ``validation.csv`` row): the success rate, then
+    fewer collisions; the earlier wins ties, as only a greater key replaces the best."""
+    return float(result["success_rate"]), -float(result["collision_rate"])
 
 
 @dataclass(frozen=True)
@@ -166,7 +173,7 @@ def make_callback(env_name: str, validation: Validation, out: Path):
                 )
             finally:
                 env.close()
-            key = (result["success_rate"], -result["collision_rate"])
+            key = selection_key(result)
             improved = self.best is None or key > self.best
             if improved:
                 self.best = key
@@ -197,7 +204,7 @@ def _best_so_far(log: Path) -> tuple[float, float] | None:
         return None
     with log.open() as f:
         rows = list(csv.DictReader(f))
-    keys = [(float(r["success_rate"]), -float(r["collision_rate"])) for r in rows]
+    keys = [selection_key(r) for r in rows]
     return max(keys) if keys else None
 
 
@@ -219,27 +226,32 @@ def validate_checkpoint(path: Path, env_name: str, episodes: int, acting: str) -
         env.close()
 
 
-def checkpoints(run: Path) -> list[tuple[int, Path]]:
-    """The run's ``checkpoints/ppo_<N>_steps.zip`` by step count."""
-    found = []
-    for path in (run / "checkpoints").glob("ppo_*_steps.zip"):
-        m = re.fullmatch(r"ppo_(\d+)_steps\.zip", path.name)
-        if m:
-            found.append((int(m.group(1)), path))
-    return sorted(found)
+def validated_checkpoints(run: Path) -> list[tuple[int, Path]]:
+    """The run's checkpoints saved at the steps it validated at (its ``validation.csv``), by
+    step count; a clear error when it never validated or lacks one of them."""
+    log = run / VALIDATION_CSV
+    if not log.exists():
+        raise SystemExit(f"{run}: no {VALIDATION_CSV}, so no validated steps to select among")
+    with log.open() as f:
+        steps = sorted({int(r["steps"]) for r in csv.DictReader(f)})
+    found = [(n, run / "checkpoints" / f"ppo_{n}_steps.zip") for n in steps]
+    missing = [str(n) for n, path in found if not path.exists()]
+    if missing:
+        raise SystemExit(f"{run}: no checkpoint at validated steps {', '.join(missing)}")
+    return found
 
 
 def reselect(run: Path, acting: str, jobs: int) -> Path:
-    """Validates every checkpoint of ``run`` acting by ``acting``; writes
+    """Validates the checkpoints of ``run`` acting by ``acting``; writes
     ``validation-<acting>.csv`` and ``best_model-<acting>.zip`` (see the module docstring) and
     returns the latter."""
     from .normalization import stats_path
 
     settings = json.loads((run / "run.json").read_text())
-    validation = Validation.from_settings(settings.get("validation")) or Validation(50_000, 40)
-    found = checkpoints(run)
-    if not found:
-        raise SystemExit(f"{run}: no checkpoints/ppo_<N>_steps.zip to select from")
+    validation = Validation.from_settings(settings.get("validation"))
+    if validation is None:
+        raise SystemExit(f"{run}: its run.json has no validation settings")
+    found = validated_checkpoints(run)
     env_name, n = settings["env"], len(found)
     print(f"{run}: {n} checkpoints, {validation.episodes} validation episodes each, "
           f"acting by its {acting}", flush=True)  # fmt: skip
@@ -250,7 +262,7 @@ def reselect(run: Path, acting: str, jobs: int) -> Path:
             validate_checkpoint, paths, [env_name] * n, [validation.episodes] * n, [acting] * n
         )
         for (steps, path), result in zip(found, results, strict=True):
-            key = (result["success_rate"], -result["collision_rate"])
+            key = selection_key(result)
             improved = best_key is None or key > best_key
             if improved:
                 best, best_key = path, key

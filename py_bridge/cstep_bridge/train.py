@@ -399,10 +399,11 @@ def _learning_rate(settings: dict[str, Any]):
 def learn_sde_features(model, settings: dict[str, Any]):
     """``model`` with gSDE's noise features trained when the run's ``sde_learn_features`` says so:
     the policy gradient then reaches the policy's latent through the noise's state-dependent std
-    too, so the policy can learn where to explore less (near walls, say) rather than only how
-    much overall. SB3's ActorCriticPolicy fixes gSDE's ``learn_features`` to False in its
-    constructor and reads it only when it builds each distribution, so it is set here, after
-    building or loading, and not saved with the model: a resumed run sets it again."""
+    too (SB3 otherwise detaches the latent there and tunes only the std's weights), so the
+    policy can shape where it explores less (near walls, say) with the features that also set
+    its mean. SB3's ActorCriticPolicy fixes gSDE's ``learn_features`` to False in its constructor
+    and reads it only when it builds each distribution, so it is set here, after building or
+    loading, and not saved with the model: a resumed run sets it again."""
     if settings.get("sde_learn_features"):
         model.policy.action_dist.learn_features = True
     return model

@@ -5,7 +5,6 @@ import json
 
 import numpy as np
 import pytest
-import torch
 from cstep_bridge import curriculum, eval_set, protocol, selection
 from cstep_bridge.envs import make_env
 from cstep_bridge.maze import LAYOUT
@@ -280,35 +279,3 @@ def test_the_floor_held_for_the_remaining_steps_is_its_discounted_sum():
     assert long == pytest.approx(-100.0, rel=1e-6)  # n → ∞: r / (1 − γ)
     with pytest.raises(ValueError, match="steps"):
         held_return(-1.0, 0, 0.99)
-
-
-def test_learnt_gsde_features_let_the_policy_gradient_shape_the_noise():
-    obs = None
-    grads = {}
-    for learn in (False, True):
-        s = tuned_settings(
-            f"sde_learn_features={str(learn).lower()}", "n_steps=64", "batch_size=64"
-        )
-        assert s["sde_learn_features"] is learn
-        venv = make_vec_env(lambda: make_env("drone", empowered=False), n_envs=1, seed=3)
-        try:
-            model = build_model({**s, "seed": 3}, venv)
-            obs = venv.reset() if obs is None else obs
-        finally:
-            venv.close()
-        assert model.policy.action_dist.learn_features is learn
-        tensor, _ = model.policy.obs_to_tensor(obs)
-        std = model.policy.get_distribution(tensor).distribution.scale.sum()
-        first_layer = model.policy.mlp_extractor.policy_net[0].weight
-        (grad,) = torch.autograd.grad(std, first_layer, allow_unused=True)
-        grads[learn] = grad
-    # Fixed features: the noise's std does not depend on the policy's latent weights at all;
-    # learnt ones: it does, so PPO's gradient can make the noise smaller where it hurts.
-    assert grads[False] is None
-    assert grads[True] is not None and grads[True].abs().sum() > 0
-    with pytest.raises(ValueError, match="sde_learn_features needs use_sde"):
-        tuned_settings(
-            "use_sde=false",
-            "sde_learn_features=true",
-            "policy_kwargs={squash_output: false, use_expln: false}",
-        )

@@ -8,10 +8,14 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import torch
 from cstep_bridge import training_log
+from cstep_bridge.envs import make_env
 from cstep_bridge.evaluate import Agent, group_seeds
+from cstep_bridge.train import build_model, learn_sde_features, parse_args, run_settings
 from module_cli import run
 from stable_baselines3 import PPO
+from stable_baselines3.common.env_util import make_vec_env
 
 TINY = [
     "--net",
@@ -293,8 +297,20 @@ def test_a_finished_run_is_selected_again_under_another_acting_rule(drone_run, t
     run_dir = tmp_path / "run"
     shutil.copytree(drone_run, run_dir)
     settings = json.loads((run_dir / "run.json").read_text())
+    proc = run("selection", str(run_dir), "--action", "mean", ok=False)
+    assert "no validation settings" in proc.stderr  # the fixture's run never validated
     settings["validation"] = {"every": 64, "episodes": 1}
     (run_dir / "run.json").write_text(json.dumps(settings))
+    proc = run("selection", str(run_dir), "--action", "mean", ok=False)
+    assert "no validation.csv" in proc.stderr
+    # As a run validating every 64 steps logs it; its checkpoints are at those steps (and a
+    # stale one that was never validated must be passed over).
+    log = "steps,success_rate,collision_rate,mean_length,best\n"
+    log += "".join(f"{n},0.0000,0.0000,900.0,{int(n == 64)}\n" for n in (64, 128, 192))
+    (run_dir / "validation.csv").write_text(log)
+    shutil.copyfile(
+        run_dir / "checkpoints" / "ppo_64_steps.zip", run_dir / "checkpoints" / "ppo_32_steps.zip"
+    )
     proc = run("selection", str(run_dir), "--action", "mean")
     assert "3 checkpoints, 1 validation episodes each, acting by its mean" in proc.stdout
     rows = (run_dir / "validation-mean.csv").read_text().splitlines()
@@ -306,5 +322,43 @@ def test_a_finished_run_is_selected_again_under_another_acting_rule(drone_run, t
     picked = run_dir / "checkpoints" / f"ppo_{last_best}_steps.zip"
     assert chosen.read_bytes() == picked.read_bytes()
     assert PPO.load(chosen, device="cpu").num_timesteps == int(last_best)
+    (run_dir / "validation.csv").write_text(log + "256,0.0000,0.0000,900.0,0\n")
+    proc = run("selection", str(run_dir), "--action", "mean", ok=False)
+    assert "no checkpoint at validated steps 256" in proc.stderr
     proc = run("selection", str(tmp_path), "--action", "mean", ok=False)
     assert "not a run directory" in proc.stderr
+
+
+def test_learnt_gsde_features_let_the_policy_gradient_shape_the_noise(tmp_path):
+    def settings(*hyperparams: str) -> dict:
+        args = ["--protocol", "tuned", "--out", "x", "--hyperparams", *hyperparams]
+        return {**run_settings(parse_args(args)), "seed": 3}
+
+    obs, grads = None, {}
+    venv = make_vec_env(lambda: make_env("drone", empowered=False), n_envs=1, seed=3)
+    try:
+        for learn in (False, True):
+            s = settings(f"sde_learn_features={str(learn).lower()}")
+            assert s["sde_learn_features"] is learn
+            model = build_model(s, venv)
+            obs = venv.reset() if obs is None else obs
+            assert model.policy.action_dist.learn_features is learn
+            tensor, _ = model.policy.obs_to_tensor(obs)
+            std = model.policy.get_distribution(tensor).distribution.scale.sum()
+            first_layer = model.policy.mlp_extractor.policy_net[0].weight
+            (grads[learn],) = torch.autograd.grad(std, first_layer, allow_unused=True)
+        # SB3 saves the model without the setting; a run resumed from it sets it again.
+        model.save(tmp_path / "model.zip")
+        loaded = PPO.load(tmp_path / "model.zip", env=venv, device="cpu")
+        assert not loaded.policy.action_dist.learn_features
+        assert learn_sde_features(loaded, s).policy.action_dist.learn_features
+    finally:
+        venv.close()
+    # Fixed features: the gradient of the noise's std stops at them (SB3 detaches them), so PPO
+    # tunes only the std's scale; learnt ones pass it on into the policy's layers, so PPO's
+    # gradient can make the noise smaller in the states where it hurts.
+    assert grads[False] is None
+    assert grads[True] is not None and grads[True].abs().sum() > 0
+    with pytest.raises(ValueError, match="sde_learn_features needs use_sde"):
+        settings("use_sde=false", "sde_learn_features=true",
+                 "policy_kwargs={squash_output: false, use_expln: false}")  # fmt: skip

@@ -1,6 +1,7 @@
 """Where does a drone policy fail, and how does it act? Flies a model's deterministic policy (acting
-by its mode or its expected action: ``--action``, ``cstep_bridge.acting``) on the evaluation arenas and reports success by how close the goal lies to a wall, how many collisions
-were with the block, where the failed episodes ended, and how saturated the actions are (for a
+by its mode or its expected action: ``--action``, ``cstep_bridge.acting``) on the evaluation
+arenas and reports success by how close the goal lies to a wall, how many collisions were with
+the block, where the failed episodes ended, and how saturated the actions are (for a
 tanh-squashed gSDE policy also the size of its pre-squash mean and exploration noise), success
 and collisions by the start's offset from the block's centre line (is the block straight ahead?),
 when the collisions happen, and how the failures without a collision end: short of the goal or

@@ -15,6 +15,14 @@ goal, so the full task (past the block, for the drone) is met from the start rat
 the levels have trained straight flights to near goals; only the level's own episodes count
 toward moving up.
 
+With ``moves: start`` the curriculum moves the *start* instead — to ``goal + f·(start − goal)``,
+the same distance ``f`` of the way from the goal — and keeps the task's own goal (a reverse
+curriculum, as Florensa et al. 2017 grow starts back from the goal): the first levels then train
+the arrival at the task's goals, half of which lie under 0.47 m from a wall (the 100 evaluation
+arenas' median), which partway goals (on the start–goal line, 0.3 m clear of obstacles) never ask
+for until the last level. A moved start keeps the same 0.3 m clear, so where the line near the
+goal runs along the block it lies further out than its level (3 of 20 arenas at level 0.3).
+
 Configured by a protocol's ``curriculum`` entry (see :mod:`~cstep_bridge.protocol`)::
 
     curriculum:
@@ -22,6 +30,7 @@ Configured by a protocol's ``curriculum`` entry (see :mod:`~cstep_bridge.protoco
       promote_at: 0.7                  # success rate over ...
       window: 60                       # ... the last this many episodes at the level
       full_task_share: 0.25            # optional: episodes on the task's own goal (default 0)
+      moves: goal                      # optional: what the levels move, goal or start
 """
 
 from __future__ import annotations
@@ -37,6 +46,8 @@ CLEARANCE = 0.3
 """A curriculum goal is at least this far (m) from every obstacle (walls, block)."""
 NUDGE = 0.05
 """Step (in f) by which a goal too close to an obstacle is moved on toward the task's goal."""
+MOVES = ("goal", "start")
+"""What a curriculum's levels move toward the other end: the goal (default) or the start."""
 
 
 @dataclass(frozen=True)
@@ -47,13 +58,14 @@ class Curriculum:
     promote_at: float
     window: int
     full_task_share: float = 0.0
+    moves: str = "goal"
 
     @classmethod
     def from_settings(cls, value: dict[str, Any] | None) -> Curriculum | None:
         """The curriculum of a run's ``curriculum`` setting; None when it has none."""
         if not value:
             return None
-        unknown = set(value) - {"levels", "promote_at", "window", "full_task_share"}
+        unknown = set(value) - {"levels", "promote_at", "window", "full_task_share", "moves"}
         if unknown:
             raise ValueError(f"curriculum: unknown keys {sorted(unknown)}")
         levels = tuple(float(v) for v in value.get("levels", (0.25, 0.5, 0.75, 1.0)))
@@ -70,7 +82,10 @@ class Curriculum:
             raise ValueError(
                 f"curriculum: full_task_share must be in [0, 1), not {full_task_share}"
             )
-        return cls(levels, promote_at, window, full_task_share)
+        moves = str(value.get("moves", "goal"))
+        if moves not in MOVES:
+            raise ValueError(f"curriculum: moves must be one of {MOVES}, not {moves!r}")
+        return cls(levels, promote_at, window, full_task_share, moves)
 
 
 def partway_goal(start: np.ndarray, goal: np.ndarray, fraction: float, clearance) -> np.ndarray:
@@ -89,6 +104,20 @@ def partway_goal(start: np.ndarray, goal: np.ndarray, fraction: float, clearance
                 if clearance(point[:2]) >= CLEARANCE:
                     return point
     return goal.copy()
+
+
+def training_endpoints(
+    start: np.ndarray, goal: np.ndarray, fraction: float, clearance, moves: str = "goal"
+) -> tuple[np.ndarray, np.ndarray]:
+    """An episode's start and goal ``fraction`` of the task's start–goal distance apart: the goal
+    moved toward the start (``moves="goal"``) or the start toward the goal (``"start"``), each by
+    :func:`partway_goal` (clear of obstacles); the task's own at ``fraction`` 1."""
+    start, goal = np.asarray(start, dtype=float), np.asarray(goal, dtype=float)
+    if fraction >= 1.0:
+        return start, goal
+    if moves == "start":
+        return partway_goal(goal, start, fraction, clearance), goal
+    return start, partway_goal(start, goal, fraction, clearance)
 
 
 def training_fraction(
@@ -137,6 +166,7 @@ def make_callback(curriculum: Curriculum, state: Path):
             self.training_env.env_method(
                 "set_wrapper_attr", "full_task_share", curriculum.full_task_share
             )
+            self.training_env.env_method("set_wrapper_attr", "curriculum_moves", curriculum.moves)
             self._apply()
 
         def _apply(self) -> None:

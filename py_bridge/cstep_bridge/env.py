@@ -37,7 +37,7 @@ import numpy as np
 from gymnasium import spaces
 
 from .collision import COLLISION_VALUES, held_return
-from .curriculum import partway_goal, training_fraction
+from .curriculum import training_endpoints, training_fraction
 from .sim import CONTROL_HZ, Arena, DroneSim, DroneState
 from .world import LIDAR_BEAMS, LIDAR_RANGE, clipped_ranges
 
@@ -151,12 +151,16 @@ class EmpoweredRewardEnv(gym.Env):
         batching wrapper starts one bridge with them for all its envs)."""
 
     goal_fraction = 1.0
-    """The curriculum level: drawn goals lie up to this share of the way from the start (1 = the
-    task's goals); set by the training curriculum (:mod:`~cstep_bridge.curriculum`), never by
+    """The curriculum level: drawn goals lie up to this share of the task's start–goal distance
+    from the start (or, with :attr:`curriculum_moves` ``"start"``, starts from the goal; 1 = the
+    task's own); set by the training curriculum (:mod:`~cstep_bridge.curriculum`), never by
     evaluation."""
     full_task_share = 0.0
     """The share of training episodes below the last curriculum level that keep the task's own
     goal (the curriculum's ``full_task_share``); set with :attr:`goal_fraction`."""
+    curriculum_moves = "goal"
+    """What the curriculum level moves: the goal toward the start (``"goal"``) or the start
+    toward the goal (``"start"``); set with :attr:`goal_fraction`."""
     episode_goal_fraction = 1.0
     """How far along its start–goal line this episode's goal lies (1 = the task's goal); in every
     step's ``info`` as ``episode_goal_fraction``, so the curriculum can tell its level's
@@ -329,8 +333,10 @@ class CStepDroneEnv(EmpoweredRewardEnv):
         arena = self.fixed_arena or Arena.random(self.np_random)
         f = self._draw_goal_fraction(self.fixed_arena is not None)
         if f < 1.0:
-            goal = partway_goal(arena.start, arena.goal, f, arena.clearance)
-            arena = dataclasses.replace(arena, goal=goal)
+            start, goal = training_endpoints(
+                arena.start, arena.goal, f, arena.clearance, self.curriculum_moves
+            )
+            arena = dataclasses.replace(arena, start=start, goal=goal)
         if options and "arena" in options:
             arena = options["arena"]
         state = self.sim.reset(arena)

@@ -51,7 +51,7 @@ import numpy as np
 import pybullet as p
 from gymnasium import spaces
 
-from .curriculum import partway_goal
+from .curriculum import training_endpoints
 from .env import RENDER_MODES, EmpoweredRewardEnv, checked_render_mode
 from .sim import CONTROL_HZ, STEPS_PER_CONTROL, DroneState
 from .world import (
@@ -349,13 +349,16 @@ class CStepMazeEnv(EmpoweredRewardEnv):
         config = self.fixed_config or configs[self.np_random.integers(len(configs))]
         fraction = self._draw_goal_fraction(self.fixed_config is not None)
         if fraction < 1.0:
-            goal = partway_goal(
+            start, goal = training_endpoints(
                 np.array(config.start),
                 np.array(config.goal),
                 fraction,
                 self.sim.layout.clearance,
+                self.curriculum_moves,
             )
-            config = MazeConfig(config.start, (float(goal[0]), float(goal[1])))
+            config = MazeConfig(
+                (float(start[0]), float(start[1])), (float(goal[0]), float(goal[1]))
+            )
         if options and "config" in options:
             config = options["config"]
         state = self.sim.reset(config)

@@ -181,6 +181,39 @@ def test_the_full_task_share_reaches_the_envs_and_marks_their_episodes(tmp_path)
         venv.close()
 
 
+def test_a_start_curriculum_keeps_the_tasks_goal_and_moves_the_start_toward_it(tmp_path):
+    """``moves: start`` (a reverse curriculum): below the last level every training episode keeps
+    its arena's own goal and starts on the line back to the task's start, clear of obstacles,
+    mostly within the level's share of the distance (not where that stretch of line runs along
+    the block: then the nearest clear point lies further out); at the last level the task's own
+    start comes back."""
+    venv = make_vec_env(lambda: make_env("drone", empowered=False), n_envs=1, seed=3)
+    plan = curriculum.Curriculum((0.3, 1.0), promote_at=1.0, window=5, moves="start")
+    try:
+        model = PPO("MlpPolicy", venv, n_steps=16, batch_size=16, n_epochs=1, device="cpu")
+        model.learn(16, callback=curriculum.make_callback(plan, tmp_path / "c.json"))
+        env = venv.envs[0].unwrapped
+        assert env.curriculum_moves == "start" and env.goal_fraction == 0.3
+        within = 0
+        for seed in range(20, 40):
+            env.reset(seed=seed)
+            task = Arena.random(np.random.default_rng(seed))
+            flown = env.sim.arena
+            assert np.allclose(flown.goal, task.goal)
+            back, out = task.start[:2] - task.goal[:2], flown.start[:2] - task.goal[:2]
+            assert abs(back[0] * out[1] - back[1] * out[0]) < 1e-9 and out @ back > 0  # on the line
+            assert task.clearance(flown.start[:2]) >= curriculum.CLEARANCE - 1e-9
+            within += np.linalg.norm(out) <= 0.3 * np.linalg.norm(back) + 1e-9
+        assert within >= 14
+        env.goal_fraction = 1.0
+        env.reset(seed=20)
+        assert np.allclose(env.sim.arena.start, Arena.random(np.random.default_rng(20)).start)
+    finally:
+        venv.close()
+    with pytest.raises(ValueError, match="moves must be one of"):
+        curriculum.Curriculum.from_settings({"levels": [0.5, 1.0], "moves": "both"})
+
+
 def test_only_the_levels_own_episodes_promote_and_promotions_are_kept_by_step(tmp_path):
     """Episodes on the task's own goal (the full-task share) never move the level up; each
     promotion is recorded with its step, and a run resumed from an earlier step goes on at the

@@ -18,10 +18,10 @@ toward moving up.
 With ``moves: start`` the curriculum moves the *start* instead — to ``goal + f·(start − goal)``,
 the same distance ``f`` of the way from the goal — and keeps the task's own goal (a reverse
 curriculum, as Florensa et al. 2017 grow starts back from the goal): the first levels then train
-the arrival at the task's goals, half of which lie under 0.47 m from a wall (the 100 evaluation
-arenas' median), which partway goals (on the start–goal line, 0.3 m clear of obstacles) never ask
-for until the last level. A moved start keeps the same 0.3 m clear, so where the line near the
-goal runs along the block it lies further out than its level (3 of 20 arenas at level 0.3).
+the arrival at the task's goals, 49 of the 100 evaluation arenas' under 0.6 m from a wall (the
+table of ``docs/results/drone/failure_modes.py``), which partway goals (on the start–goal line,
+0.3 m clear of obstacles) never ask for until the last level. A moved start keeps the same 0.3 m
+clear, so where the line near the goal runs along the block it lies further out than its level.
 
 Configured by a protocol's ``curriculum`` entry (see :mod:`~cstep_bridge.protocol`)::
 

@@ -86,15 +86,16 @@ def fly_episodes(
     return episodes
 
 
-def fly(
+def fly_saved(
     model_path: Path,
     env_name: str,
-    indices: list[int],
-    eval_set: Path | None = None,
+    configs: list[Any],
+    ids: list[int],
     acting: str = DEFAULT_ACTING_RULE,
 ) -> list[metrics.Episode]:
-    """Flies configurations ``indices`` with the deterministic policy under the ``acting`` rule
-    (in a worker process)."""
+    """Flies ``configs`` (numbered ``ids``) with the model saved at ``model_path`` — on the CPU, one
+    thread, through the normaliser saved beside it — under the ``acting`` rule, in a fresh env
+    (what a worker process of an evaluation or a re-selection runs)."""
     import torch
     from stable_baselines3 import PPO
 
@@ -102,20 +103,25 @@ def fly(
 
     torch.set_num_threads(1)
     model = PPO.load(model_path, device="cpu")
-    configs = configurations(env_name, eval_set)
     env = make_env(env_name, empowered=False)
     try:
-        return fly_episodes(
-            model,
-            env,
-            env_name,
-            [configs[i] for i in indices],
-            indices,
-            observation_normalizer(model_path),
-            acting,
-        )
+        normalize = observation_normalizer(model_path)
+        return fly_episodes(model, env, env_name, configs, ids, normalize, acting)
     finally:
         env.close()
+
+
+def fly(
+    model_path: Path,
+    env_name: str,
+    indices: list[int],
+    eval_set: Path | None = None,
+    acting: str = DEFAULT_ACTING_RULE,
+) -> list[metrics.Episode]:
+    """Flies evaluation configurations ``indices`` with the deterministic policy under the
+    ``acting`` rule (in a worker process)."""
+    configs = configurations(env_name, eval_set)
+    return fly_saved(model_path, env_name, [configs[i] for i in indices], indices, acting)
 
 
 def fly_model(

@@ -131,7 +131,14 @@ def fly_validation(
     from .flights import fly_episodes
 
     ids = list(range(len(configs)))
-    episodes = fly_episodes(model, env, env_name, configs, ids, normalize_obs, acting)
+    return validation_result(
+        fly_episodes(model, env, env_name, configs, ids, normalize_obs, acting)
+    )
+
+
+def validation_result(episodes) -> dict[str, float]:
+    """A validation's figures from its flown episodes: success and collision rates, mean episode
+    length (steps)."""
     return {
         "success_rate": float(np.mean([e.success for e in episodes])),
         "collision_rate": float(np.mean([e.collision for e in episodes])),
@@ -210,20 +217,10 @@ def _best_so_far(log: Path) -> tuple[float, float] | None:
 
 def validate_checkpoint(path: Path, env_name: str, episodes: int, acting: str) -> dict:
     """The validation result of the model saved at ``path`` (in a worker process)."""
-    import torch
-    from stable_baselines3 import PPO
+    from .flights import fly_saved
 
-    from .envs import make_env
-    from .normalization import observation_normalizer
-
-    torch.set_num_threads(1)
-    model = PPO.load(path, device="cpu")
-    env = make_env(env_name, empowered=False)
-    try:
-        configs = validation_set(env_name, episodes)
-        return fly_validation(model, env, env_name, configs, observation_normalizer(path), acting)
-    finally:
-        env.close()
+    configs = validation_set(env_name, episodes)
+    return validation_result(fly_saved(path, env_name, configs, list(range(episodes)), acting))
 
 
 def validated_checkpoints(run: Path) -> list[tuple[int, Path]]:

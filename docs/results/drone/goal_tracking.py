@@ -1,0 +1,56 @@
+"""Does a policy end where the goal is? From evaluations already flown (their ``results.json``),
+without flying again: for the episodes without a collision, the least-squares slope of the
+drone's end position on the goal's (per axis; 1 when it ends at the goal whatever the goal, 0 when
+it ends in the same place whatever the goal), and for those that failed without a collision how far
+from the goal they ended and in which direction on average.
+
+    PYTHONPATH=py_bridge .venv/bin/python docs/results/drone/goal_tracking.py \\
+        runs/sweep/d53-startcurr-seed14/eval/results.json runs/sweep/d57-startcurr-sde4-seed11/eval/results.json
+
+A slope well below 1 with failures a few tenths of a metre from the goal says the policy comes to
+rest at a compromise between the goal it observes and a place it prefers, not that it cannot fly
+there. The goals are those of the evaluation set the results were flown on (default: the
+committed ``data/drone_eval_set.json``; ``--eval-set`` for another).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from pathlib import Path
+
+import numpy as np
+from cstep_bridge import eval_set
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("results", type=Path, nargs="+", help="results.json files of evaluate")
+    ap.add_argument("--eval-set", type=Path, help="the JSON evaluation set they were flown on")
+    args = ap.parse_args()
+    arenas = eval_set.load(args.eval_set) if args.eval_set else eval_set.load()
+    goals = np.array([arena.goal[:2] for arena in arenas])
+    print(
+        "| model | episodes without a collision | slope x | slope y | failed, no collision |"
+        " median distance (m) | mean offset x, y (m) |"
+    )
+    print("|---|---:|---:|---:|---:|---:|---:|")
+    for path in args.results:
+        for model, episodes in json.loads(path.read_text())["episodes"].items():
+            free = [e for e in episodes if not e["collision"]]
+            goal = goals[[e["config"] for e in free]]
+            end = np.array([e["end"] for e in free])
+            slope = [np.polyfit(goal[:, k], end[:, k], 1)[0] for k in (0, 1)]
+            short = np.array([not e["success"] for e in free])
+            offset = end[short] - goal[short]
+            distance = np.median(np.linalg.norm(offset, axis=1)) if short.any() else float("nan")
+            mean = offset.mean(axis=0) if short.any() else (float("nan"),) * 2
+            print(
+                f"| {model} | {len(free)} | {slope[0]:.2f} | {slope[1]:.2f} | {short.sum()} |"
+                f" {distance:.2f} | {mean[0]:+.2f}, {mean[1]:+.2f} |"
+            )
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

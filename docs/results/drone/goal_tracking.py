@@ -26,10 +26,14 @@ from cstep_bridge import eval_set
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("results", type=Path, nargs="+", help="results.json files of evaluate")
-    ap.add_argument("--eval-set", type=Path, help="the JSON evaluation set they were flown on")
+    ap.add_argument(
+        "--eval-set",
+        type=Path,
+        default=eval_set.DEFAULT_PATH,
+        help="the JSON evaluation set they were flown on (default: the committed one)",
+    )
     args = ap.parse_args()
-    arenas = eval_set.load(args.eval_set) if args.eval_set else eval_set.load()
-    goals = np.array([arena.goal[:2] for arena in arenas])
+    goals = np.array([arena.goal[:2] for arena in eval_set.load(args.eval_set)])
     print(
         "| model | episodes without a collision | slope x | slope y | failed, no collision |"
         " median distance (m) | mean offset x, y (m) |"

@@ -1,0 +1,101 @@
+"""Where every drone run of the sweep landed against the issue's bar: success against collisions on
+the 100 evaluation arenas, one point per run, read from the run tables of
+``docs/results/protocol.md`` (the sweep's record; no flights, no training).
+
+    PYTHONPATH=py_bridge .venv/bin/python docs/results/drone/sweep_map.py --out docs/results/drone/sweep_map.png
+
+A run counts when it has a row in a run table whose last column is the 100-arena result (``100
+arenas succ / coll``, the tables from d35 on; the earlier tables end with the 40-episode
+validation instead and are left out, as are runs stopped before an evaluation). Points are coloured by the sweep's
+phase (which base the run changed one lever of), so the picture shows what each phase moved:
+the bar (≥ 85 % success, ≤ 5 % collisions) is the shaded corner.
+"""
+
+from __future__ import annotations
+
+import argparse
+import re
+from pathlib import Path
+
+ROW = re.compile(r"^\| (d\d\d)-[^|]*\|.*\| (\d+(?:\.\d+)?) % / (\d+(?:\.\d+)?) % \|\s*$")
+"""A run-table row: its run number, then, in its last cell, success / collisions."""
+HEADER = "| run | change |"
+"""How a run table's header starts."""
+RESULT_COLUMN = "| 100 arenas succ / coll |"
+"""How the header of a run table whose last column is the 100-arena result ends."""
+
+PHASES = (
+    ("d34–d49: 16 envs, goal curriculum", 34, 49),
+    ("d50–d68: reverse curriculum (start moves)", 50, 68),
+)
+"""The sweep's phases by run number: (label, first, last)."""
+
+BAR_SUCCESS, BAR_COLLISIONS = 85.0, 5.0
+"""The issue's drone bar, in percent of the 100 arenas."""
+
+
+def runs(protocol: Path) -> dict[str, tuple[float, float]]:
+    """Run number → (success %, collisions %) on the 100 arenas; a run listed twice (a result table
+    and the sweep table) keeps its last row."""
+    found: dict[str, tuple[float, float]] = {}
+    in_result_table = False
+    for line in protocol.read_text().splitlines():
+        if line.startswith(HEADER):
+            in_result_table = line.rstrip().endswith(RESULT_COLUMN)
+        m = ROW.match(line)
+        if m and in_result_table:
+            found[m.group(1)] = (float(m.group(2)), float(m.group(3)))
+    return found
+
+
+def phase_of(run: str) -> str:
+    """The label of the phase run ``dNN`` belongs to."""
+    n = int(run[1:])
+    return next(label for label, first, last in PHASES if first <= n <= last)
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--protocol", type=Path, default=Path("docs/results/protocol.md"))
+    ap.add_argument("--out", type=Path, default=Path("docs/results/drone/sweep_map.png"))
+    args = ap.parse_args()
+    found = runs(args.protocol)
+    if not found:
+        raise SystemExit(f"{args.protocol}: no run rows with a 100-arena result")
+
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(7.5, 5.5))
+    ax.add_patch(
+        plt.Rectangle(
+            (0, BAR_SUCCESS), BAR_COLLISIONS, 100 - BAR_SUCCESS, color="tab:green", alpha=0.2
+        )
+    )
+    ax.text(0.5, 93, "issue's bar", color="tab:green", fontsize=9)
+    for label, _, _ in PHASES:
+        members = sorted(r for r in found if phase_of(r) == label)
+        if not members:
+            continue
+        xs = [found[r][1] for r in members]
+        ys = [found[r][0] for r in members]
+        ax.scatter(xs, ys, label=f"{label} ({len(members)})", s=28)
+        for r, x, y in zip(members, xs, ys, strict=True):
+            ax.annotate(r, (x, y), fontsize=6, xytext=(2, 2), textcoords="offset points")
+    ax.set_xlabel("collisions on the 100 arenas (%)")
+    ax.set_ylabel("success on the 100 arenas (%)")
+    ax.set_xlim(-2, 100)
+    ax.set_ylim(-2, 100)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8, loc="upper right")
+    ax.set_title("Drone sweep: every evaluated run (unempowered, docs/results/protocol.md)")
+    fig.tight_layout()
+    fig.savefig(args.out, dpi=120)
+    print(f"wrote {args.out}: {len(found)} runs")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -86,7 +86,7 @@ def main() -> int:
             ax.annotate(r, (x, y), fontsize=6, xytext=(2, 2), textcoords="offset points")
     ax.set_xlabel("collisions on the 100 arenas (%)")
     ax.set_ylabel("success on the 100 arenas (%)")
-    ax.set_xlim(-2, 100)
+    ax.set_xlim(-2, max(50.0, max(c for _, c in found.values()) + 5))
     ax.set_ylim(-2, 100)
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8, loc="upper right")

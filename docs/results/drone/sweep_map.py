@@ -6,9 +6,9 @@ the 100 evaluation arenas, one point per run, read from the run tables of
 
 A run counts when it has a row in a run table whose last column is the 100-arena result (``100
 arenas succ / coll``, the tables from d35 on; the earlier tables end with the 40-episode
-validation instead and are left out, as are runs stopped before an evaluation). Points are coloured by the sweep's
-phase (which base the run changed one lever of), so the picture shows what each phase moved:
-the bar (≥ 85 % success, ≤ 5 % collisions) is the shaded corner.
+validation instead and are left out, as are runs stopped before an evaluation). Points are
+coloured by the sweep's phase (which base the run changed one lever of), so the picture shows
+what each phase moved: the bar (≥ 85 % success, ≤ 5 % collisions) is the shaded corner.
 """
 
 from __future__ import annotations
@@ -48,10 +48,16 @@ def runs(protocol: Path) -> dict[str, tuple[float, float]]:
     return found
 
 
-def phase_of(run: str) -> str:
-    """The label of the phase run ``dNN`` belongs to."""
-    n = int(run[1:])
-    return next(label for label, first, last in PHASES if first <= n <= last)
+def by_phase(found: dict[str, tuple[float, float]]) -> dict[str, list[str]]:
+    """Phase label → its runs among ``found``, in run order (phases without runs left out)."""
+    groups: dict[str, list[str]] = {}
+    for run in sorted(found):
+        n = int(run[1:])
+        label = next((label for label, first, last in PHASES if first <= n <= last), None)
+        if label is None:
+            raise SystemExit(f"{run}: in no phase of {PHASES}")
+        groups.setdefault(label, []).append(run)
+    return groups
 
 
 def main() -> int:
@@ -75,10 +81,7 @@ def main() -> int:
         )
     )
     ax.text(0.5, 93, "issue's bar", color="tab:green", fontsize=9)
-    for label, _, _ in PHASES:
-        members = sorted(r for r in found if phase_of(r) == label)
-        if not members:
-            continue
+    for label, members in by_phase(found).items():
         xs = [found[r][1] for r in members]
         ys = [found[r][0] for r in members]
         ax.scatter(xs, ys, label=f"{label} ({len(members)})", s=28)

@@ -23,11 +23,7 @@ from pathlib import Path
 
 import numpy as np
 from scipy import stats
-
-#: The issue's drone bar: at least this success rate ...
-BAR_SUCCESS = 0.85
-#: ... with at most this collision rate, on the 100 arenas.
-BAR_COLLISIONS = 0.05
+from sweep_map import BAR_COLLISIONS, BAR_SUCCESS
 
 
 def load(paths: list[Path]) -> list[tuple[int, float, float]]:
@@ -68,7 +64,7 @@ def main() -> int:
             "collisions": collisions,
             "success - collisions": margin,
         }
-        met = int(np.sum((success >= 100 * BAR_SUCCESS) & (collisions <= 100 * BAR_COLLISIONS)))
+        met = int(np.sum((success >= BAR_SUCCESS) & (collisions <= BAR_COLLISIONS)))
         print(f"## {name}: {len(runs)} seeds, {met} meet the bar\n")
         print("| seed | success % | collisions % | success - collisions |")
         print("|---:|---:|---:|---:|")

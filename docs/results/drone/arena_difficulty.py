@@ -18,7 +18,6 @@ random.
 
 from __future__ import annotations
 
-import argparse
 import json
 from pathlib import Path
 
@@ -26,6 +25,7 @@ import numpy as np
 from cstep_bridge import eval_set
 from cstep_bridge.sim import Arena, DroneParams
 from cstep_bridge.world import rect_distance
+from goal_tracking import flown_results_parser
 
 LINE_SAMPLES = 400
 """Points along a start-goal line at which its clearance is taken (≈ 1 cm apart)."""
@@ -49,14 +49,7 @@ def shares(paths: list[Path], arenas: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 def main() -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("results", type=Path, nargs="+", help="results.json files of evaluate")
-    ap.add_argument(
-        "--eval-set",
-        type=Path,
-        default=eval_set.DEFAULT_PATH,
-        help="the JSON evaluation set they were flown on (default: the committed one)",
-    )
+    ap = flown_results_parser(__doc__.splitlines()[0])
     ap.add_argument("--out", type=Path, help="where to draw the figure (none without)")
     args = ap.parse_args()
     arenas = eval_set.load(args.eval_set)

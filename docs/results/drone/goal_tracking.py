@@ -23,8 +23,10 @@ import numpy as np
 from cstep_bridge import eval_set
 
 
-def main() -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+def flown_results_parser(description: str) -> argparse.ArgumentParser:
+    """The arguments of a script that reads evaluations already flown: their ``results.json``
+    files and the evaluation set they were flown on."""
+    ap = argparse.ArgumentParser(description=description)
     ap.add_argument("results", type=Path, nargs="+", help="results.json files of evaluate")
     ap.add_argument(
         "--eval-set",
@@ -32,7 +34,11 @@ def main() -> int:
         default=eval_set.DEFAULT_PATH,
         help="the JSON evaluation set they were flown on (default: the committed one)",
     )
-    args = ap.parse_args()
+    return ap
+
+
+def main() -> int:
+    args = flown_results_parser(__doc__.splitlines()[0]).parse_args()
     goals = np.array([arena.goal[:2] for arena in eval_set.load(args.eval_set)])
     print(
         "| model | episodes without a collision | slope x | slope y | failed, no collision |"

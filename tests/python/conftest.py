@@ -28,6 +28,13 @@ REPO = HERE.parent.parent
 sys.path.insert(0, str(REPO / "py_bridge"))
 from cstep_bridge.ros_io import PRIVATE_DOMAINS
 
+# Run as a background job (`make test &`), the tests start with SIGINT ignored (the shell's rule
+# for `&`), a disposition every process they start inherits and keeps: the Ctrl-C a test sends a
+# peer, a node or a bag command would never reach it. A handler of this process's own is reset to
+# the default in each child instead.
+if signal.getsignal(signal.SIGINT) == signal.SIG_IGN:
+    signal.signal(signal.SIGINT, signal.default_int_handler)
+
 # Tests take the domains from the end of the bridge's private ones to 100 (Fast DDS ports stay clear
 # of the ephemeral range up to 101): a training run's private domain is never a test's. Start at an
 # offset from this process id so that two test runs on one machine (two worktrees, say) are

@@ -33,11 +33,6 @@ def bag_command(*args: str, domain: int | None = None) -> subprocess.Popen:
     """``python -m cstep_bridge.bag args`` from this checkout, on this test's domain or
     ``domain``; the caller ends it."""
     env = dict(os.environ, PYTHONPATH=str(REPO / "py_bridge"))
-    if signal.getsignal(signal.SIGINT) == signal.SIG_IGN:
-        # Run as a background job, the tests start with SIGINT ignored (the shell's rule for
-        # `&`), a disposition every child inherits and keeps: Ctrl-C would never reach it. A
-        # handler of our own is reset to the default in the child instead.
-        signal.signal(signal.SIGINT, signal.default_int_handler)
     if domain is not None:
         env["ROS_DOMAIN_ID"] = str(domain)
     return subprocess.Popen(

@@ -5,8 +5,12 @@ against one number of its geometry: the clearance of the straight start-goal lin
 through it).
 
     PYTHONPATH=py_bridge .venv/bin/python docs/results/drone/arena_difficulty.py \\
-        runs/sweep/d5[0-4]-*/eval/results.json runs/sweep/d6[1-8]-*/eval/results.json \\
-        runs/sweep/d7*/eval/results.json --out docs/results/drone/arena_difficulty.png
+        runs/sweep/d5[0-8]-*/eval/results.json runs/sweep/d6[0-4]-*/eval/results.json \\
+        runs/sweep/d6[7-9]-*/eval/results.json runs/sweep/d[78][0-9]-*/eval/results.json \\
+        --out docs/results/drone/arena_difficulty.png
+
+(the committed figure: every reverse-curriculum run that reached the full task; d59, d65 and d66
+never learnt it).
 
 It prints the shares for the arenas whose straight line clears the block by more than the drone's
 radius and for the rest, and what part of all collisions happened in the rest; the figure shows

@@ -8,9 +8,13 @@ collisions). Then Welch's two-sided t test of B against A on each of the three, 
 ``docs/results/protocol.md`` declares its multi-seed reads:
 
     PYTHONPATH=py_bridge .venv/bin/python docs/results/drone/seed_read.py \\
-        --a runs/sweep/d5[0-4]-*/eval/results.json runs/sweep/d8[0-4]-*/eval/results.json \\
+        --a runs/sweep/d5[0-4]-*/eval/results.json runs/sweep/d8[1-5]-*/eval/results.json \\
         --b runs/sweep/d6[12]-*/eval/results.json runs/sweep/d7[3-9]-*/eval/results.json \\
+            runs/sweep/d80-*/eval/results.json \\
         --names "reverse curriculum" "raw observations"
+
+(the ten-seed read of ``protocol.md``: the reverse curriculum alone, d50–d54 and d81–d85,
+against raw observations, d61, d62 and d73–d80).
 
 Written by hand because it is a few lines over scipy's ``ttest_ind`` and ``t.interval``.
 """

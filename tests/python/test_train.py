@@ -293,7 +293,7 @@ def test_evaluation_cache_flies_only_the_episodes_it_lacks(drone_run, tmp_path):
     assert len(list(cache.glob("*.pkl"))) == 3
 
 
-def test_a_finished_run_is_selected_again_under_another_acting_rule(drone_run, tmp_path):
+def test_a_finished_run_is_selected_again_by_another_rule_set_or_span(drone_run, tmp_path):
     run_dir = tmp_path / "run"
     shutil.copytree(drone_run, run_dir)
     settings = json.loads((run_dir / "run.json").read_text())
@@ -322,6 +322,19 @@ def test_a_finished_run_is_selected_again_under_another_acting_rule(drone_run, t
     picked = run_dir / "checkpoints" / f"ppo_{last_best}_steps.zip"
     assert chosen.read_bytes() == picked.read_bytes()
     assert PPO.load(chosen, device="cpu").num_timesteps == int(last_best)
+    # On a larger validation set, among the later checkpoints only, acting by the run's own rule:
+    # files of their own, beside the first selection's.
+    proc = run("selection", str(run_dir), "--episodes", "2", "--from", "128")
+    assert "2 checkpoints, 2 validation episodes each, acting by its mode" in proc.stdout
+    rows = (run_dir / "validation-mode-2ep-from128.csv").read_text().splitlines()
+    assert [r.split(",")[0] for r in rows[1:]] == ["128", "192"]
+    assert rows[1].endswith(",1")
+    assert (run_dir / "best_model-mode-2ep-from128.zip").exists()
+    assert (run_dir / "validation-mean.csv").exists()
+    proc = run("selection", str(run_dir), "--from", "193", ok=False)
+    assert "no validated steps from 193 on" in proc.stderr
+    proc = run("selection", str(run_dir), "--episodes", "0", ok=False)
+    assert "--episodes must be > 0" in proc.stderr
     (run_dir / "validation.csv").write_text(log + "256,0.0000,0.0000,900.0,0\n")
     proc = run("selection", str(run_dir), "--action", "mean", ok=False)
     assert "no checkpoint at validated steps 256" in proc.stderr

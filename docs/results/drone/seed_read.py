@@ -16,6 +16,10 @@ collisions). Then Welch's two-sided t test of B against A on each of the three, 
 (the ten-seed read of ``protocol.md``: the reverse curriculum alone, d50–d54 and d81–d85,
 against raw observations, d61, d62 and d73–d80).
 
+With ``--paired`` the two sets hold the same runs (the same seeds) scored two ways, say each run's
+own best model against the model another selection chose from the same run (``protocol.md``,
+s01); it then tests the per-seed differences (a paired t test) and shows their 95 % interval.
+
 Written by hand because it is a few lines over scipy's ``ttest_ind`` and ``t.interval``.
 """
 
@@ -48,6 +52,8 @@ def interval(values: np.ndarray) -> str:
     mean = values.mean()
     if len(values) < 2:
         return f"{mean:.1f}"
+    if np.ptp(values) == 0:  # no spread: the interval is the point (t would divide by zero)
+        return f"{mean:.1f} [{mean:.1f}, {mean:.1f}]"
     low, high = stats.t.interval(0.95, len(values) - 1, loc=mean, scale=stats.sem(values))
     return f"{mean:.1f} [{low:.1f}, {high:.1f}]"
 
@@ -57,8 +63,16 @@ def main() -> int:
     ap.add_argument("--a", type=Path, nargs="+", required=True, help="setting A's results.json")
     ap.add_argument("--b", type=Path, nargs="+", required=True, help="setting B's results.json")
     ap.add_argument("--names", nargs=2, default=("A", "B"), help="the two settings' names")
+    ap.add_argument(
+        "--paired", action="store_true", help="A and B are the same seeds' runs, scored two ways"
+    )
     args = ap.parse_args()
     groups = {name: load(paths) for name, paths in zip(args.names, (args.a, args.b), strict=True)}
+    seeds = [[seed for seed, _, _ in runs] for runs in groups.values()]
+    if args.paired and seeds[0] != seeds[1]:
+        raise SystemExit(
+            f"--paired needs the same seeds on both sides, not {seeds[0]} and {seeds[1]}"
+        )
     scores = {}
     for name, runs in groups.items():
         _, success, collisions = (np.array(column) for column in zip(*runs, strict=True))
@@ -78,6 +92,21 @@ def main() -> int:
             f"| mean [95 % CI] | {interval(success)} | {interval(collisions)} | {interval(margin)} |\n"
         )
     a, b = args.names
+    if args.paired:
+        print(f"## Paired t test, {b} against {a} (two-sided; per seed, {b} minus {a})\n")
+        print("| score | per seed | difference [95 % CI] | changed | t | p |")
+        print("|---|---|---:|---:|---:|---:|")
+        for score in scores[a]:
+            differences = scores[b][score] - scores[a][score]
+            if np.ptp(differences) > 0:
+                result = stats.ttest_rel(scores[b][score], scores[a][score])
+                t, p = f"{result.statistic:.2f}", f"{result.pvalue:.3f}"
+            else:  # every seed moved by the same amount (usually none): no test to make
+                t, p = "–", "–"
+            per_seed = ", ".join(f"{d:+.0f}" for d in differences)
+            print(f"| {score} | {per_seed} | {interval(differences)} |"
+                  f" {np.count_nonzero(differences)} of {len(differences)} | {t} | {p} |")  # fmt: skip
+        return 0
     print(f"## Welch's t test, {b} against {a} (two-sided)\n")
     print("| score | difference | t | p |")
     print("|---|---:|---:|---:|")

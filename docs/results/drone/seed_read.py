@@ -16,9 +16,10 @@ collisions). Then Welch's two-sided t test of B against A on each of the three, 
 (the ten-seed read of ``protocol.md``: the reverse curriculum alone, d50–d54 and d81–d85,
 against raw observations, d61, d62 and d73–d80).
 
-With ``--paired`` the two sets hold the same runs (the same seeds) scored two ways, say each run's
-own best model against the model another selection chose from the same run (``protocol.md``,
-s01); it then tests the per-seed differences (a paired t test) and shows their 95 % interval.
+With ``--paired`` the two sets hold the same runs scored two ways, say each run's own best model
+(``eval/``) against the model another selection chose from the same run (``protocol.md``, s01:
+``eval-100ep-from500000/``); rows are then runs, not seeds (runs of two settings may share a
+seed), and it tests the per-run differences (a paired t test) and shows their 95 % interval.
 
 Written by hand because it is a few lines over scipy's ``ttest_ind`` and ``t.interval``.
 """
@@ -34,16 +35,20 @@ from scipy import stats
 from sweep_map import BAR_COLLISIONS, BAR_SUCCESS
 
 
-def load(paths: list[Path]) -> list[tuple[int, float, float]]:
-    """(seed, success %, collisions %) per run, sorted by seed."""
+def load(paths: list[Path], by_run: bool = False) -> list[tuple[int | str, float, float]]:
+    """(seed, success %, collisions %) per run, sorted by seed; with ``by_run``, the run's
+    directory name instead of its seed."""
     runs = []
     for path in paths:
         (summary,) = json.loads(path.read_text())["summaries"].values()
-        seed = json.loads((path.parent.parent / "run.json").read_text())["seed"]
-        runs.append((seed, 100 * summary["success_rate"], 100 * summary["collision_rate"]))
-    seeds = [seed for seed, _, _ in runs]
-    if len(set(seeds)) != len(seeds):
-        raise SystemExit(f"a seed appears twice in {[str(p) for p in paths]}: {sorted(seeds)}")
+        run = path.parent.parent
+        key = run.name if by_run else json.loads((run / "run.json").read_text())["seed"]
+        runs.append((key, 100 * summary["success_rate"], 100 * summary["collision_rate"]))
+    keys = [key for key, _, _ in runs]
+    if len(set(keys)) != len(keys):
+        raise SystemExit(
+            f"a seed or run appears twice in {[str(p) for p in paths]}: {sorted(keys)}"
+        )
     return sorted(runs)
 
 
@@ -64,15 +69,16 @@ def main() -> int:
     ap.add_argument("--b", type=Path, nargs="+", required=True, help="setting B's results.json")
     ap.add_argument("--names", nargs=2, default=("A", "B"), help="the two settings' names")
     ap.add_argument(
-        "--paired", action="store_true", help="A and B are the same seeds' runs, scored two ways"
+        "--paired", action="store_true", help="A and B are the same runs, scored two ways"
     )
     args = ap.parse_args()
-    groups = {name: load(paths) for name, paths in zip(args.names, (args.a, args.b), strict=True)}
-    seeds = [[seed for seed, _, _ in runs] for runs in groups.values()]
-    if args.paired and seeds[0] != seeds[1]:
-        raise SystemExit(
-            f"--paired needs the same seeds on both sides, not {seeds[0]} and {seeds[1]}"
-        )
+    groups = {
+        name: load(paths, args.paired)
+        for name, paths in zip(args.names, (args.a, args.b), strict=True)
+    }
+    keys = [[key for key, _, _ in runs] for runs in groups.values()]
+    if args.paired and keys[0] != keys[1]:
+        raise SystemExit(f"--paired needs the same runs on both sides, not {keys[0]} and {keys[1]}")
     scores = {}
     for name, runs in groups.items():
         _, success, collisions = (np.array(column) for column in zip(*runs, strict=True))
@@ -83,8 +89,9 @@ def main() -> int:
             "success - collisions": margin,
         }
         met = int(np.sum((success >= BAR_SUCCESS) & (collisions <= BAR_COLLISIONS)))
-        print(f"## {name}: {len(runs)} seeds, {met} meet the bar\n")
-        print("| seed | success % | collisions % | success - collisions |")
+        unit = "run" if args.paired else "seed"
+        print(f"## {name}: {len(runs)} {unit}s, {met} meet the bar\n")
+        print(f"| {unit} | success % | collisions % | success - collisions |")
         print("|---:|---:|---:|---:|")
         for seed, s, c in runs:
             print(f"| {seed} | {s:.0f} | {c:.0f} | {s - c:.0f} |")
@@ -93,15 +100,15 @@ def main() -> int:
         )
     a, b = args.names
     if args.paired:
-        print(f"## Paired t test, {b} against {a} (two-sided; per seed, {b} minus {a})\n")
-        print("| score | per seed | difference [95 % CI] | changed | t | p |")
+        print(f"## Paired t test, {b} against {a} (two-sided; per run, {b} minus {a})\n")
+        print("| score | per run | difference [95 % CI] | changed | t | p |")
         print("|---|---|---:|---:|---:|---:|")
         for score in scores[a]:
             differences = scores[b][score] - scores[a][score]
             if np.ptp(differences) > 0:
                 result = stats.ttest_rel(scores[b][score], scores[a][score])
                 t, p = f"{result.statistic:.2f}", f"{result.pvalue:.3f}"
-            else:  # every seed moved by the same amount (usually none): no test to make
+            else:  # every run moved by the same amount (usually none): no test to make
                 t, p = "–", "–"
             per_seed = ", ".join(f"{d:+.0f}" for d in differences)
             print(f"| {score} | {per_seed} | {interval(differences)} |"

@@ -6,10 +6,10 @@ through it).
 
     PYTHONPATH=py_bridge .venv/bin/python docs/results/drone/arena_difficulty.py \\
         runs/sweep/d5[0-8]-*/eval/results.json runs/sweep/d6[0-4]-*/eval/results.json \\
-        runs/sweep/d6[7-9]-*/eval/results.json runs/sweep/d[78][0-9]-*/eval/results.json \\
+        runs/sweep/d6[7-9]-*/eval/results.json runs/sweep/d7[0-9]-*/eval/results.json runs/sweep/d8[0-5]-*/eval/results.json \\
         --out docs/results/drone/arena_difficulty.png
 
-(the committed figure: every reverse-curriculum run that reached the full task; d59, d65 and d66
+(the committed figure: every reverse-curriculum run to d85 that reached the full task; d59, d65 and d66
 never learnt it).
 
 It prints the shares for the arenas whose straight line clears the block by more than the drone's
@@ -81,6 +81,15 @@ def main() -> int:
     return 0
 
 
+def block_patch(arena: Arena, **style):
+    """The block of ``arena`` as a matplotlib rectangle centred on y = 0, the common frame in
+    which the figures draw every arena (the block's x span and width are the same in all)."""
+    from matplotlib.patches import Rectangle
+
+    x0, x1 = arena.block_x
+    return Rectangle((x0, -arena.block_width / 2), x1 - x0, arena.block_width, **style)
+
+
 def draw(
     arenas: list[Arena], clearance: np.ndarray, collided: np.ndarray, radius: float, out: Path
 ) -> None:
@@ -117,18 +126,7 @@ def draw(
         linewidths=1.2,
     )
     right.add_collection(lines)
-    block = arenas[0]
-    right.add_patch(
-        plt.Rectangle(
-            (block.block_x[0], -block.block_width / 2),
-            block.block_x[1] - block.block_x[0],
-            block.block_width,
-            facecolor="none",
-            edgecolor="black",
-            lw=1.5,
-            zorder=3,
-        )
-    )
+    right.add_patch(block_patch(arenas[0], facecolor="none", edgecolor="black", lw=1.5, zorder=3))
     right.autoscale()
     right.set_xlabel("x (m)")
     right.set_ylabel("y relative to the block's centre line (m)")

@@ -22,7 +22,7 @@ import json
 from pathlib import Path
 
 import numpy as np
-from arena_difficulty import line_clearance
+from arena_difficulty import block_patch, line_clearance
 from cstep_bridge import eval_set
 from cstep_bridge.sim import Arena, DroneParams
 from goal_tracking import flown_results_parser
@@ -95,16 +95,7 @@ def draw(
     import matplotlib.pyplot as plt
 
     fig, ax = plt.subplots(figsize=(9, 4.5))
-    block = arenas[0]
-    ax.add_patch(
-        plt.Rectangle(
-            (block.block_x[0], -block.block_width / 2),
-            block.block_x[1] - block.block_x[0],
-            block.block_width,
-            facecolor="0.85",
-            edgecolor="black",
-        )
-    )
+    ax.add_patch(block_patch(arenas[0], facecolor="0.85", edgecolor="black"))
     for name in SITES:
         points = np.array(
             [

@@ -17,7 +17,7 @@ import argparse
 import re
 from pathlib import Path
 
-ROW = re.compile(r"^\| (d\d\d)-[^|]*\|.*\| (\d+(?:\.\d+)?) % / (\d+(?:\.\d+)?) % \|\s*$")
+ROW = re.compile(r"^\| (d\d{2,3})-[^|]*\|.*\| (\d+(?:\.\d+)?) % / (\d+(?:\.\d+)?) % \|\s*$")
 """A run-table row: its run number, then, in its last cell, success / collisions."""
 HEADER = "| run | change |"
 """How a run table's header starts."""
@@ -26,7 +26,7 @@ RESULT_COLUMN = "| 100 arenas succ / coll |"
 
 PHASES = (
     ("d34–d49: 16 envs, goal curriculum", 34, 49),
-    ("d50 on: reverse curriculum (start moves)", 50, 99),
+    ("d50 on: reverse curriculum (start moves)", 50, 999),
 )
 """The sweep's phases by run number: (label, first, last); the last is open to the runs to come."""
 

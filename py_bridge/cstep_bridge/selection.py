@@ -270,8 +270,9 @@ def reselect(
     validation = Validation.from_settings(settings.get("validation"))
     if validation is None:
         raise SystemExit(f"{run}: its run.json has no validation settings")
-    name = selection_name(acting or validation.action, episodes, start)
-    acting, episodes = acting or validation.action, episodes or validation.episodes
+    acting = acting or validation.action
+    name = selection_name(acting, episodes, start)
+    episodes = episodes or validation.episodes
     found = validated_checkpoints(run, start)
     env_name, n = settings["env"], len(found)
     print(f"{run}: {n} checkpoints, {episodes} validation episodes each, "

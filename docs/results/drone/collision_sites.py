@@ -51,7 +51,7 @@ def site(arena: Arena, end: tuple[float, float], radius: float) -> str:
     return "wall"
 
 
-def collisions(paths: list[Path], arenas: list[Arena]) -> list[tuple[int, tuple[float, float]]]:
+def collisions(paths: list[Path]) -> list[tuple[int, tuple[float, float]]]:
     """(arena, end point) of every collision in the evaluations."""
     found = []
     for path in paths:
@@ -66,7 +66,7 @@ def main() -> int:
     args = ap.parse_args()
     arenas = eval_set.load(args.eval_set)
     radius = DroneParams.from_urdf().radius
-    found = collisions(args.results, arenas)
+    found = collisions(args.results)
     blocked = {k: line_clearance(a) < radius for k, a in enumerate(arenas)}
     sites = [site(arenas[k], end, radius) for k, end in found]
     print(f"{len(args.results)} runs, {len(found)} collisions\n")

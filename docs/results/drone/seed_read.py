@@ -93,8 +93,8 @@ def main() -> int:
         print(f"## {name}: {len(runs)} {unit}s, {met} meet the bar\n")
         print(f"| {unit} | success % | collisions % | success - collisions |")
         print("|---:|---:|---:|---:|")
-        for seed, s, c in runs:
-            print(f"| {seed} | {s:.0f} | {c:.0f} | {s - c:.0f} |")
+        for key, s, c in runs:
+            print(f"| {key} | {s:.0f} | {c:.0f} | {s - c:.0f} |")
         print(
             f"| mean [95 % CI] | {interval(success)} | {interval(collisions)} | {interval(margin)} |\n"
         )
@@ -110,8 +110,8 @@ def main() -> int:
                 t, p = f"{result.statistic:.2f}", f"{result.pvalue:.3f}"
             else:  # every run moved by the same amount (usually none): no test to make
                 t, p = "–", "–"
-            per_seed = ", ".join(f"{d:+.0f}" for d in differences)
-            print(f"| {score} | {per_seed} | {interval(differences)} |"
+            per_run = ", ".join(f"{d:+.0f}" for d in differences)
+            print(f"| {score} | {per_run} | {interval(differences)} |"
                   f" {np.count_nonzero(differences)} of {len(differences)} | {t} | {p} |")  # fmt: skip
         return 0
     print(f"## Welch's t test, {b} against {a} (two-sided)\n")

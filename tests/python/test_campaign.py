@@ -9,6 +9,7 @@ from pathlib import Path
 import pytest
 import yaml
 from cstep_bridge.campaign import Plan
+from cstep_bridge.curriculum import Curriculum
 from module_cli import run
 
 TINY = [
@@ -108,3 +109,45 @@ def test_a_run_whose_training_fails_is_reported_and_the_others_go_on(tmp_path):
     assert not (tmp_path / "models" / "c0.5-s4").exists()
     record = json.loads((broken / "campaign.json").read_text())
     assert record["stretches"][0]["exit"] != 0
+
+
+COMPARISON_N_ENVS = 8
+"""Envs per update the committed comparisons trained with (their train logs' "8 env(s)"): run.json
+leaves n_envs out, as how a run is executed rather than what it is."""
+
+
+@pytest.mark.parametrize(
+    "plan_file",
+    [
+        "docs/results/drone/comparison.yml",
+        "docs/results/drone/comparison-none.yml",
+        "docs/results/maze/comparison.yml",
+    ],
+)
+def test_a_committed_plan_still_trains_what_its_committed_models_were_trained_with(plan_file):
+    """A protocol file may move on (tuned.yml does, as the sweep finds better settings); a
+    committed campaign must keep reproducing its committed models, pinning what changed."""
+    from conftest import REPO
+    from cstep_bridge import train
+
+    plan = Plan.load(REPO / plan_file, REPO)
+    checked = 0
+    for scheduled in plan.schedule():
+        exported = REPO / scheduled.export / "run.json"
+        if not exported.exists():
+            continue
+        trained = json.loads(exported.read_text())
+        args = train.parse_args(plan.train_command(scheduled, resume=False)[3:])
+        settings = train.run_settings(args)
+        train.execution_defaults(args, settings)
+        for both in (trained, settings):  # a curriculum by its meaning, defaults filled in
+            both["curriculum"] = Curriculum.from_settings(both.get("curriculum"))
+        differ = {
+            k: (trained[k], settings[k])
+            for k in settings
+            if k in trained and trained[k] != settings[k]
+        }
+        assert not differ, f"{scheduled.export}: trained with / now {differ}"
+        assert args.n_envs == COMPARISON_N_ENVS, scheduled.export
+        checked += 1
+    assert checked, f"{plan_file}: no committed model to check"

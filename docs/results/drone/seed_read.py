@@ -37,11 +37,14 @@ from sweep_map import BAR_COLLISIONS, BAR_SUCCESS
 
 def load(paths: list[Path], by_run: bool = False) -> list[tuple[int | str, float, float]]:
     """(seed, success %, collisions %) per run, sorted by seed; with ``by_run``, the run's
-    directory name instead of its seed."""
+    directory name instead of its seed. The run is the directory of the model evaluated, so an
+    evaluation written anywhere (an export's, say) is read by its model's seed."""
     runs = []
     for path in paths:
-        (summary,) = json.loads(path.read_text())["summaries"].values()
-        run = path.parent.parent
+        results = json.loads(path.read_text())
+        (summary,) = results["summaries"].values()
+        (episodes,) = results["episodes"].values()
+        run = Path(episodes[0]["model"]).parent  # the evaluated model's run (or export) directory
         key = run.name if by_run else json.loads((run / "run.json").read_text())["seed"]
         runs.append((key, 100 * summary["success_rate"], 100 * summary["collision_rate"]))
     keys = [key for key, _, _ in runs]

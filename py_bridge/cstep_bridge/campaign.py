@@ -40,6 +40,7 @@ import sys
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import yaml
 
@@ -122,15 +123,22 @@ class Plan:
         plan.check_training_settings(path)
         return plan
 
+    def training_settings(self, run: Run) -> tuple[argparse.Namespace, dict[str, Any]]:
+        """The trainer's arguments and the settings ``run`` starts with, derived as the trainer
+        derives them (the protocol, the plan's arguments, the protocol's envs and steps where the
+        plan names none). Raises SystemExit or ValueError where the trainer would refuse them."""
+        from . import train
+
+        args = train.parse_args(self.train_command(run, resume=False)[3:])
+        settings = train.run_settings(args)
+        train.execution_defaults(args, settings)
+        return args, settings
+
     def check_training_settings(self, path: Path) -> None:
         """Raises ValueError unless the trainer accepts the plan's arguments and its runs
         validate at least once (else no best-validation model to export)."""
-        from . import train
-
-        run = self.schedule()[0]
         try:
-            args = train.parse_args(self.train_command(run, resume=False)[3:])
-            settings = train.run_settings(args)
+            _, settings = self.training_settings(self.schedule()[0])
         except (SystemExit, ValueError) as err:
             raise ValueError(f"{path}: the trainer refuses the plan's arguments ({err})") from err
         validation = settings.get("validation")

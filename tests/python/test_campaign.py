@@ -8,6 +8,7 @@ from pathlib import Path
 
 import pytest
 import yaml
+from conftest import REPO
 from cstep_bridge.campaign import Plan
 from cstep_bridge.curriculum import Curriculum
 from module_cli import run
@@ -127,9 +128,6 @@ leaves n_envs out, as how a run is executed rather than what it is."""
 def test_a_committed_plan_still_trains_what_its_committed_models_were_trained_with(plan_file):
     """A protocol file may move on (tuned.yml does, as the sweep finds better settings); a
     committed campaign must keep reproducing its committed models, pinning what changed."""
-    from conftest import REPO
-    from cstep_bridge import train
-
     plan = Plan.load(REPO / plan_file, REPO)
     checked = 0
     for scheduled in plan.schedule():
@@ -137,9 +135,7 @@ def test_a_committed_plan_still_trains_what_its_committed_models_were_trained_wi
         if not exported.exists():
             continue
         trained = json.loads(exported.read_text())
-        args = train.parse_args(plan.train_command(scheduled, resume=False)[3:])
-        settings = train.run_settings(args)
-        train.execution_defaults(args, settings)
+        args, settings = plan.training_settings(scheduled)
         for both in (trained, settings):  # a curriculum by its meaning, defaults filled in
             both["curriculum"] = Curriculum.from_settings(both.get("curriculum"))
         differ = {

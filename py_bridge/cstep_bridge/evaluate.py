@@ -6,8 +6,9 @@
 Models with the same label (``--label``, or by default the agent and its c from run.json, e.g.
 ``unempowered``, ``empowered c=0.5``) are one agent trained with several seeds. Every model flies
 every configuration of the environment's fixed evaluation set (the drone: the 100 arenas of
-``data/drone_eval_set.json``; the maze: its 18 start × goal combinations) with its deterministic
-policy, acting by its mode or its expected action (``--action``, :mod:`cstep_bridge.acting`).
+``data/drone_eval_set.json``; the maze: its 18 start × goal combinations) with its policy, acting
+by its mode, its expected action or sampling as in training (``--action``,
+:mod:`cstep_bridge.acting`).
 Evaluation needs no reward, so no ``cstep node`` runs. ``--cache DIR`` keeps each
 model's episodes (:mod:`cstep_bridge.episode_cache`): a re-run flies only what it lacks.
 Writes to ``--out``:
@@ -370,8 +371,9 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         "--action",
         choices=ACTING_RULES,
         default=DEFAULT_ACTING_RULE,
-        help="how the trained policy acts: its mode (SB3's deterministic action) or its expected "
-        "action under its own noise (docs/results/protocol.md, e01; default: %(default)s)",
+        help="how the trained policy acts: its mode (SB3's deterministic action), its expected "
+        "action under its own noise (docs/results/protocol.md, e01) or its action sampled as in "
+        "training, seeded per episode (e02; default: %(default)s)",
     )
     ap.add_argument("--jobs", type=int, default=1, help="worker processes per agent")
     ap.add_argument(

@@ -1,9 +1,9 @@
 """Flying trained models over an evaluation set: the episodes :mod:`~cstep_bridge.evaluate`
 tables, the validation of :mod:`~cstep_bridge.selection` and the analysis scripts measure.
 
-Every configuration is flown with a deterministic policy (by one of :mod:`~cstep_bridge.acting`'s
-rules) from ``reset(seed=index)``, so an episode depends only on the model, its observation
-normaliser, the acting rule, the configuration and the code that flies it (this module, the envs,
+Every configuration is flown by one of :mod:`~cstep_bridge.acting`'s rules from
+``reset(seed=index)`` (a sampling rule seeded by the index too), so an episode depends only on the
+model, its observation normaliser, the acting rule, the configuration and the code that flies it (this module, the envs,
 the simulation): what :mod:`~cstep_bridge.episode_cache` keys its entries on.
 """
 
@@ -53,8 +53,8 @@ def fly_episodes(
     normalize_obs=None,
     acting: str = DEFAULT_ACTING_RULE,
 ) -> list[metrics.Episode]:
-    """Flies each of ``configs`` (numbered ``ids``) in ``env`` with ``model``'s deterministic
-    policy under the ``acting`` rule; ``normalize_obs`` maps raw observations to the policy's
+    """Flies each of ``configs`` (numbered ``ids``) in ``env`` with ``model``'s policy under the
+    ``acting`` rule; ``normalize_obs`` maps raw observations to the policy's
     input, if it needs that."""
     act = actor(model, acting)
     radius = env.unwrapped.robot_radius
@@ -65,6 +65,7 @@ def fly_episodes(
     episodes = []
     for i, config in zip(ids, configs, strict=True):
         obs, info = env.reset(seed=i, options=reset_options(env_name, config))
+        act.start(i)
         xy, gap, done = [], [], False
         while not done:
             x = obs if normalize_obs is None else normalize_obs(obs)
@@ -118,8 +119,7 @@ def fly(
     eval_set: Path | None = None,
     acting: str = DEFAULT_ACTING_RULE,
 ) -> list[metrics.Episode]:
-    """Flies evaluation configurations ``indices`` with the deterministic policy under the
-    ``acting`` rule (in a worker process)."""
+    """Flies evaluation configurations ``indices`` with the policy under the ``acting`` rule (in a worker process)."""
     configs = configurations(env_name, eval_set)
     return fly_saved(model_path, env_name, [configs[i] for i in indices], indices, acting)
 

@@ -3,7 +3,7 @@ but scored by the task's success rate rather than by the reward, so that it sele
 empowered or not, by the same measure).
 
 Every ``every`` training steps the current policy flies ``episodes`` validation configurations
-deterministically, acting by the ``action`` rule (:mod:`~cstep_bridge.acting`), in an
+acting by the ``action`` rule (:mod:`~cstep_bridge.acting`), in an
 unempowered env (flying needs no reward, so no node); the model with the
 highest validation success rate so far (ties: fewer collisions, then the earlier) is saved as
 ``best_model.zip``. Each validation is appended to ``validation.csv`` and logged to TensorBoard.
@@ -131,8 +131,7 @@ def fly_validation(
     normalize_obs=None,
     acting: str = DEFAULT_ACTING_RULE,
 ):
-    """Success and collision rates and mean episode length (steps) of ``model``'s deterministic
-    policy, acting by the ``acting`` rule, on ``configs`` in ``env``."""
+    """Success and collision rates and mean episode length (steps) of ``model``'s policy, acting by the ``acting`` rule, on ``configs`` in ``env``."""
     from .flights import fly_episodes
 
     ids = list(range(len(configs)))

@@ -92,3 +92,54 @@ def test_one_observation_at_a_time_and_unknown_rules_are_named():
     with pytest.raises(ValueError, match="validation: acting rule"):
         selection.Validation.from_settings({"every": 10, "action": "median"})
     assert selection.Validation.from_settings({"action": "mean"}).action == "mean"
+
+
+def flown_actions(act, observations: np.ndarray, episode: int) -> np.ndarray:
+    """The actions ``act`` takes along ``observations`` in episode number ``episode``."""
+    act.start(episode)
+    return np.array([act(obs) for obs in observations])
+
+
+def test_sampling_is_reproducible_per_episode_and_is_not_the_mode():
+    model, observations = policy_for("drone", "policy_kwargs={log_std_init: -0.5}")
+    sample, mode = acting.actor(model, "sample"), acting.actor(model, "mode")
+    first = flown_actions(sample, observations, 3)
+    flown_actions(sample, observations, 8)  # another episode between the two flights of 3
+    np.testing.assert_array_equal(flown_actions(sample, observations, 3), first)
+    assert not np.allclose(flown_actions(sample, observations, 4), first, atol=1e-3)
+    modes = np.array([mode(obs) for obs in observations])
+    assert np.abs(first - modes).max() > 5 * TOLERANCE
+    assert np.all(np.abs(first) <= 1.0)
+
+
+def test_sampling_draws_the_gsde_noise_as_often_as_training_does():
+    # resampled every 2 steps: at one observation, steps 0-1 share one action, 2-3 another
+    model, observations = policy_for(
+        "drone", "policy_kwargs={log_std_init: -0.5}", "sde_sample_freq=2"
+    )
+    actions = flown_actions(acting.actor(model, "sample"), np.repeat(observations[:1], 6, 0), 0)
+    np.testing.assert_array_equal(actions[0], actions[1])
+    np.testing.assert_array_equal(actions[2], actions[3])
+    assert not np.allclose(actions[1], actions[2], atol=1e-3)
+    assert not np.allclose(actions[3], actions[4], atol=1e-3)
+
+
+def test_sampling_leaves_the_training_random_stream_and_noise_as_they_were():
+    model, observations = policy_for("drone", "policy_kwargs={log_std_init: -0.5}")
+    model.policy.reset_noise(4)
+    noise = model.policy.action_dist.exploration_matrices.clone()
+    torch.manual_seed(11)
+    flown_actions(acting.actor(model, "sample"), observations, 2)
+    after = torch.rand(3)
+    torch.manual_seed(11)
+    np.testing.assert_array_equal(after.numpy(), torch.rand(3).numpy())
+    assert torch.equal(model.policy.action_dist.exploration_matrices, noise)
+
+
+def test_a_sampling_actor_must_be_started():
+    model, observations = policy_for("maze", "policy_kwargs={log_std_init: 0.0}")
+    with pytest.raises(RuntimeError, match="start"):
+        acting.actor(model, "sample")(observations[0])
+    # the maze's policy has no gSDE: every action is drawn afresh
+    actions = flown_actions(acting.actor(model, "sample"), np.repeat(observations[:1], 3, 0), 1)
+    assert not np.allclose(actions[0], actions[1], atol=1e-3)

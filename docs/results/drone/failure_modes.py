@@ -85,8 +85,9 @@ def main() -> int:
     rows, observations, actions = [], [], []
     last = round(LAST_SECONDS * CONTROL_HZ)
     try:
-        for config in configurations("drone")[: args.episodes]:
+        for i, config in enumerate(configurations("drone")[: args.episodes]):
             obs, info = env.reset(options=reset_options("drone", config))
+            act.start(i)
             offset = abs(env.sim.arena.start[1] - env.sim.arena.block_y)
             done = False
             flown, speeds = [], []

@@ -38,7 +38,6 @@ QUANTILES = 2_000
 a [−1, 1] box)."""
 
 
-
 class Actor:
     """A trained policy as it is flown under one rule: ``start(episode)`` at each episode's
     start, then the action for one observation at a time (as the policy sees it)."""

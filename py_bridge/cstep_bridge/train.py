@@ -16,8 +16,9 @@ environment starts a node of its own instead.
 
 The run directory ``--out`` holds:
 
-- ``run.json``: the settings, written when the run starts; ``--resume`` continues with them
-  (only ``--timesteps``, ``--n-envs`` and how it runs may change).
+- ``run.json``: the settings, written when the run starts, the envs per update among them;
+  ``--resume`` continues with them (only ``--timesteps`` and how it runs may change; ``--n-envs``
+  too, said aloud, as it changes the batch of each update).
 - ``checkpoints/ppo_<steps>_steps.zip`` every ``--checkpoint-every`` steps, and ``model.zip`` at the end
   (with ``vecnormalize*.pkl`` beside each when the protocol normalises, see
   :mod:`~cstep_bridge.normalization`).
@@ -55,6 +56,7 @@ RUN_SETTINGS = (
     "seed",
     "protocol",
     *protocol.SETTING_NAMES,
+    "n_envs",
     "reward_mode",
     "checkpoint_every",
 )
@@ -181,18 +183,30 @@ def run_settings(args: argparse.Namespace) -> dict[str, Any]:
         "seed": args.seed,
         "protocol": args.protocol,
         **settings,
+        "n_envs": args.n_envs if args.n_envs is not None else int(hyper["n_envs"]),
         "reward_mode": args.reward_mode,
         "checkpoint_every": args.checkpoint_every,
     }
 
 
 def execution_defaults(args: argparse.Namespace, settings: dict[str, Any]) -> None:
-    """Fills ``--timesteps`` and ``--n-envs`` from the run's protocol where not given."""
+    """Fills ``--timesteps`` from the run's protocol and ``--n-envs`` from its settings where not
+    given; a run.json from before they held ``n_envs`` needs ``--n-envs`` (the protocol file may
+    have moved on since the run began)."""
     hyper = protocol.load(settings.get("protocol", "paper"), settings["env"])
     if args.timesteps is None:
         args.timesteps = int(hyper["n_timesteps"])
+    stored = settings.get("n_envs")
     if args.n_envs is None:
-        args.n_envs = int(hyper["n_envs"])
+        if stored is None:
+            raise SystemExit(
+                "--resume: this run's run.json does not say how many envs it trains with (it "
+                "began before run.json recorded it); pass --n-envs with the number its "
+                'train.log names ("N env(s)")'
+            )
+        args.n_envs = int(stored)
+    elif stored is not None and args.n_envs != stored:
+        print(f"--n-envs {args.n_envs}: the run began with {stored} envs per update", flush=True)
     if args.vec_env is None:
         args.vec_env = "subproc" if args.n_envs > 1 else "dummy"
 

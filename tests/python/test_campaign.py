@@ -113,8 +113,8 @@ def test_a_run_whose_training_fails_is_reported_and_the_others_go_on(tmp_path):
 
 
 COMPARISON_N_ENVS = 8
-"""Envs per update the committed comparisons trained with (their train logs' "8 env(s)"): run.json
-leaves n_envs out, as how a run is executed rather than what it is."""
+"""Envs per update the committed comparisons trained with (their train logs' "8 env(s)"): their
+run.json files predate run.json recording n_envs."""
 
 
 @pytest.mark.parametrize(

@@ -77,6 +77,26 @@ def test_a_second_run_into_the_same_directory_is_refused(drone_run):
     assert "already holds a run" in proc.stderr
 
 
+def test_a_run_resumes_with_the_envs_per_update_it_began_with(tmp_path):
+    """n_envs sets the batch of every update, so a resumed run keeps its own even where the
+    protocol file now says otherwise (paper.yml: 1); a run.json from before it recorded n_envs
+    asks for --n-envs rather than guessing from the protocol."""
+    out = tmp_path / "two"
+    common = ["--out", str(out), "--vec-env", "dummy", "--no-progress"]
+    run("train", "--env", "drone", "--n-envs", "2", "--timesteps", "128", *common, *TINY[:-1])
+    assert json.loads((out / "run.json").read_text())["n_envs"] == 2
+    again = run("train", "--resume", "--timesteps", "256", *common)
+    assert "256, 2 env(s)" in again.stdout
+    assert PPO.load(out / "model.zip", device="cpu").num_timesteps == 256
+    settings = json.loads((out / "run.json").read_text())
+    del settings["n_envs"]
+    (out / "run.json").write_text(json.dumps(settings))
+    refused = run("train", "--resume", "--timesteps", "384", *common, ok=False)
+    assert "pass --n-envs" in refused.stderr
+    moved = run("train", "--resume", "--timesteps", "320", "--n-envs", "1", *common)
+    assert "320, 1 env(s)" in moved.stdout
+
+
 def test_empowered_training_with_two_envs_sharing_one_node(tmp_path):
     out = tmp_path / "emp"
     proc = run(

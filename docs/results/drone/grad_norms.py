@@ -1,0 +1,85 @@
+"""How PPO's gradient clipping shares one update between the policy and the value function: for
+a saved model of a run, collects one rollout as its training does (the run's settings, envs and
+observation normaliser; the task at full size), then for every minibatch of one epoch the norm of
+the policy loss's gradient, of the value loss's (times ``vf_coef``) and the factor SB3's
+``clip_grad_norm_`` over all parameters at ``max_grad_norm`` scales both by. A value gradient
+that dwarfs the policy's shrinks the policy's step with it, and Adam (eps 1e-5) does not undo a
+step shrunk below its eps.
+
+    PYTHONPATH=py_bridge .venv/bin/python docs/results/drone/grad_norms.py runs/sweep/d96-startcurr-rawrew-seed11
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+import numpy as np
+import torch
+from cstep_bridge.normalization import stats_path
+from cstep_bridge.train import load_settings, training_vec_env
+from stable_baselines3 import PPO
+from stable_baselines3.common.callbacks import BaseCallback
+from stable_baselines3.common.vec_env import VecNormalize
+
+
+class _Nothing(BaseCallback):
+    def _on_step(self) -> bool:
+        return True
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("run", type=Path, help="a run directory")
+    ap.add_argument(
+        "--model",
+        default="best_model.zip",
+        help="the model in it (e.g. checkpoints/ppo_150000_steps.zip)",
+    )
+    ap.add_argument("--n-envs", type=int, default=16)
+    args = ap.parse_args()
+    torch.set_num_threads(1)
+    settings = load_settings(args.run)
+    settings = {**settings, "curriculum": None}  # the whole task
+    venv = training_vec_env(settings, args.n_envs, "dummy", None)
+    stats = stats_path(args.run / args.model)
+    venv = VecNormalize.load(str(stats), venv) if stats.exists() else venv
+    venv.training = False
+    model = PPO.load(args.run / args.model, env=venv, device="cpu")
+    model._setup_learn(model.n_steps * args.n_envs, _Nothing(), reset_num_timesteps=True)
+    callback = _Nothing()
+    callback.init_callback(model)
+    model.collect_rollouts(venv, callback, model.rollout_buffer, model.n_steps)
+    policy = model.policy
+    pi_params = [p for n, p in policy.named_parameters() if "value" not in n]
+    vf_params = [p for n, p in policy.named_parameters() if "value" in n]
+    rows = []
+    for data in model.rollout_buffer.get(model.batch_size):
+        values, log_prob, _ = policy.evaluate_actions(data.observations, data.actions)
+        adv = data.advantages
+        adv = (adv - adv.mean()) / (adv.std() + 1e-8)
+        ratio = torch.exp(log_prob - data.old_log_prob)
+        pg = -torch.min(adv * ratio, adv * torch.clamp(ratio, 0.9, 1.1)).mean()
+        vf = torch.nn.functional.mse_loss(data.returns, values.flatten())
+        g_pi = torch.autograd.grad(pg, pi_params, allow_unused=True, retain_graph=True)
+        g_vf = torch.autograd.grad(model.vf_coef * vf, vf_params, allow_unused=True)
+        n_pi = torch.sqrt(sum((g**2).sum() for g in g_pi if g is not None)).item()
+        n_vf = torch.sqrt(sum((g**2).sum() for g in g_vf if g is not None)).item()
+        total = (n_pi**2 + n_vf**2) ** 0.5
+        rows.append((n_pi, n_vf, min(1.0, model.max_grad_norm / total), vf.item()))
+    r = np.array(rows)
+    q = lambda c: np.percentile(r[:, c], [10, 50, 90])
+    print(f"{args.run} ({args.model}), {len(r)} minibatches of {model.batch_size}")
+    returns = model.rollout_buffer.returns
+    print(f"returns: mean {returns.mean():.1f}, max {returns.max():.1f}")
+    print("policy-loss gradient norm (10/50/90 %):", np.round(q(0), 4))
+    print("value-loss gradient norm x vf_coef:    ", np.round(q(1), 2))
+    print(f"clip factor at max_grad_norm {model.max_grad_norm}:", np.round(q(2), 5))
+    print("policy gradient norm after clipping:  ", np.round(q(0) * q(2)[::-1], 6))
+    print("value loss:", np.round(q(3), 1))
+    venv.close()
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

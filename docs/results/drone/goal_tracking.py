@@ -9,13 +9,16 @@ from the goal they ended and in which direction on average.
 
 A slope well below 1 with failures a few tenths of a metre from the goal says the policy comes to
 rest at a compromise between the goal it observes and a place it prefers, not that it cannot fly
-there. The goals are those of the evaluation set the results were flown on (default: the
-committed ``data/drone_eval_set.json``; ``--eval-set`` for another).
+there. A second table pools every episode given by how close its goal lies to a wall: success,
+collisions, collision-free failures and how far from the goal those ended. The goals are those
+of the evaluation set the results were flown on (default: the committed
+``data/drone_eval_set.json``; ``--eval-set`` for another).
 """
 
 from __future__ import annotations
 
 import argparse
+import itertools
 import json
 from pathlib import Path
 
@@ -37,9 +40,51 @@ def flown_results_parser(description: str) -> argparse.ArgumentParser:
     return ap
 
 
+WALL_BINS = (0.0, 0.25, 0.4, 0.6, 10.0)
+"""Edges (m) of the bins of the goal's distance to the nearest arena wall."""
+
+
+def wall_distance(bounds: tuple[float, float, float, float], xy: np.ndarray) -> float:
+    """Distance (m) from ``xy`` to the nearest of the walls at ``bounds`` (x0, y0, x1, y1)."""
+    x0, y0, x1, y1 = bounds
+    return float(min(xy[0] - x0, x1 - xy[0], xy[1] - y0, y1 - xy[1]))
+
+
+def by_wall_distance(arenas: list, results: list[Path]) -> None:
+    """Prints the pooled episodes of ``results`` by their goal's distance to a wall."""
+    rows = []
+    for path in results:
+        for episodes in json.loads(path.read_text())["episodes"].values():
+            for e in episodes:
+                arena = arenas[e["config"]]
+                goal = np.asarray(arena.goal[:2])
+                rows.append(
+                    (
+                        wall_distance(arena.bounds, goal),
+                        e["success"],
+                        e["collision"],
+                        np.linalg.norm(np.asarray(e["end"]) - goal),
+                    )
+                )
+    wall, success, collision, final = np.array(rows, dtype=float).T
+    print(
+        "\n| goal's distance to a wall (m) | episodes | success | collisions | failed, no "
+        "collision | their median distance to the goal (m) |\n|---|---:|---:|---:|---:|---:|"
+    )
+    for lo, hi in itertools.pairwise(WALL_BINS):
+        sel = (wall >= lo) & (wall < hi)
+        short = sel & (success == 0) & (collision == 0)
+        distance = f"{np.median(final[short]):.2f}" if short.any() else "–"
+        print(
+            f"| {lo:g}–{hi:g} | {sel.sum()} | {success[sel].mean():.0%} | "
+            f"{collision[sel].mean():.0%} | {short.sum() / sel.sum():.0%} | {distance} |"
+        )
+
+
 def main() -> int:
     args = flown_results_parser(__doc__.splitlines()[0]).parse_args()
-    goals = np.array([arena.goal[:2] for arena in eval_set.load(args.eval_set)])
+    arenas = eval_set.load(args.eval_set)
+    goals = np.array([arena.goal[:2] for arena in arenas])
     print(
         "| model | episodes without a collision | slope x | slope y | failed, no collision |"
         " median distance (m) | mean offset x, y (m) |"
@@ -59,6 +104,7 @@ def main() -> int:
                 f"| {model} | {len(free)} | {slope[0]:.2f} | {slope[1]:.2f} | {short.sum()} |"
                 f" {distance:.2f} | {mean[0]:+.2f}, {mean[1]:+.2f} |"
             )
+    by_wall_distance(arenas, args.results)
     return 0
 
 

@@ -27,7 +27,8 @@ RESULT_COLUMN = "| 100 arenas succ / coll |"
 PHASES = (
     ("d34–d49: 16 envs, goal curriculum", 34, 49),
     ("d50–d105: reverse curriculum (start moves)", 50, 105),
-    ("d106 on: tuned.yml before 2026-12-05 (goal curriculum, 8 envs)", 106, 999),
+    ("d106–d109: tuned.yml before 2026-12-05 (goal curriculum, 8 envs)", 106, 109),
+    ("d110 on: reverse curriculum, max_grad_norm 1000", 110, 999),
 )
 """The sweep's phases by run number: (label, first, last); the last is open to the runs to come."""
 

@@ -119,7 +119,8 @@ def fly(
     eval_set: Path | None = None,
     acting: str = DEFAULT_ACTING_RULE,
 ) -> list[metrics.Episode]:
-    """Flies evaluation configurations ``indices`` with the policy under the ``acting`` rule (in a worker process)."""
+    """Flies evaluation configurations ``indices`` with the policy under the ``acting`` rule (in a
+    worker process)."""
     configs = configurations(env_name, eval_set)
     return fly_saved(model_path, env_name, [configs[i] for i in indices], indices, acting)
 

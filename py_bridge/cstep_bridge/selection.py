@@ -131,7 +131,8 @@ def fly_validation(
     normalize_obs=None,
     acting: str = DEFAULT_ACTING_RULE,
 ):
-    """Success and collision rates and mean episode length (steps) of ``model``'s policy, acting by the ``acting`` rule, on ``configs`` in ``env``."""
+    """Success and collision rates and mean episode length (steps) of ``model``'s policy, acting
+    by the ``acting`` rule, on ``configs`` in ``env``."""
     from .flights import fly_episodes
 
     ids = list(range(len(configs)))

@@ -122,12 +122,15 @@ class Arena:
         goal = np.array([rng.uniform(2.7, 4.2), rng.uniform(-1.6, 0.4), 1.0])
         return cls(block_y=block_y, start=start, goal=goal)
 
-    def clearance(self, xy: np.ndarray) -> float:
-        """Distance (m) from a point to the nearest wall or block face, 2D (negative inside)."""
+    def wall_distance(self, xy: np.ndarray) -> float:
+        """Distance (m) from a point to the nearest of the four walls, 2D (not the block)."""
         x, y = float(xy[0]), float(xy[1])
         x0, y0, x1, y1 = self.bounds
-        walls = min(x - x0, x1 - x, y - y0, y1 - y)
-        return min(walls, rect_distance(x, y, self.block))
+        return min(x - x0, x1 - x, y - y0, y1 - y)
+
+    def clearance(self, xy: np.ndarray) -> float:
+        """Distance (m) from a point to the nearest wall or block face, 2D (negative inside)."""
+        return min(self.wall_distance(xy), rect_distance(float(xy[0]), float(xy[1]), self.block))
 
 
 @dataclass

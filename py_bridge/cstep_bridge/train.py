@@ -48,18 +48,6 @@ from . import protocol
 from .envs import ENV_NAMES, make_env
 from .normalization import stats_path
 
-# What a run's settings are: fixed when it starts, kept by --resume.
-RUN_SETTINGS = (
-    "env",
-    "agent",
-    "c",
-    "seed",
-    "protocol",
-    *protocol.SETTING_NAMES,
-    "n_envs",
-    "reward_mode",
-    "checkpoint_every",
-)
 # Episode fields the Monitor writes and the summaries read.
 INFO_KEYWORDS = ("success", "collision")
 # Command-line options that override one protocol setting each (option dest -> setting name).

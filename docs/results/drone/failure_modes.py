@@ -1,9 +1,9 @@
-"""Where does a drone policy fail, and how does it act? Flies a model's deterministic policy (acting
-by its mode or its expected action: ``--action``, ``cstep_bridge.acting``) on the evaluation
-arenas and reports success by how close the goal lies to a wall, how many collisions were with
-the block, where the failed episodes ended, and how saturated the actions are (for a
-tanh-squashed gSDE policy also the size of its pre-squash mean and exploration noise), success
-and collisions by the start's offset from the block's centre line (is the block straight ahead?),
+"""Where does a drone policy fail, and how does it act? Flies a model's policy (acting by one of
+``cstep_bridge.acting``'s rules: ``--action``) on the evaluation arenas and reports success by
+how close the goal lies to a wall, how many collisions were with the block, where the failed
+episodes ended, and how saturated the actions are (for a tanh-squashed gSDE policy also the size
+of its pre-squash mean and exploration noise, over all steps and near the goal), success and
+collisions by the start's offset from the block's centre line (is the block straight ahead?),
 when the collisions happen, and how the failures without a collision end: short of the goal or
 stalled on the way, and whether the policy still pushes there (chattering: large actions that
 cancel out over the last seconds, the drone nearly still).
@@ -42,12 +42,8 @@ SHORT_OF_GOAL = 1.0
 it stalled on the way."""
 LAST_SECONDS = 3.0
 """The end of an episode (s) over which its actions and speed are summarised."""
-
-
-def wall_distance(env: CStepDroneEnv, xy: np.ndarray) -> float:
-    """Distance (m) from ``xy`` to the nearest of the arena's four walls (not the block)."""
-    x0, y0, x1, y1 = env.sim.arena.bounds
-    return float(min(xy[0] - x0, x1 - xy[0], xy[1] - y0, y1 - xy[1]))
+NEAR_GOAL = 0.6
+"""Within this distance (m) of the goal, the pre-squash mean and noise are summarised apart."""
 
 
 def noise_and_mean(model: PPO, observations: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
@@ -82,7 +78,7 @@ def main() -> int:
     act = actor(model, args.action)
     norm = observation_normalizer(path) or (lambda obs: obs)
     env = CStepDroneEnv(empowered=False)
-    rows, observations, actions = [], [], []
+    rows, observations, actions, distances = [], [], [], []
     last = round(LAST_SECONDS * CONTROL_HZ)
     try:
         for i, config in enumerate(configurations("drone")[: args.episodes]):
@@ -95,6 +91,7 @@ def main() -> int:
                 o = norm(obs)
                 action = act(o)
                 observations.append(o)
+                distances.append(info["distance_to_goal"])
                 flown.append(action)
                 obs, _, terminated, truncated, info = env.step(action)
                 speeds.append(np.linalg.norm(env.sim.state().velocity[:2]))
@@ -102,10 +99,12 @@ def main() -> int:
             actions += flown
             tail = np.array(flown[-last:])
             goal, end = env.sim.goal[:2], np.asarray(info["position"])
-            nearer_block = rect_distance(*end, env.sim.arena.block) < wall_distance(env, end)
+            nearer_block = rect_distance(*end, env.sim.arena.block) < env.sim.arena.wall_distance(
+                end
+            )
             rows.append(
                 (
-                    wall_distance(env, goal),
+                    env.sim.arena.wall_distance(goal),
                     info["success"],
                     info["collision"],
                     info["distance_to_goal"],
@@ -158,7 +157,7 @@ def main() -> int:
             f"\nfailed without a collision: {failed.sum()} arenas; they ended at x "
             f"{np.median(ended[:, 0]):.2f} (median), y {np.median(ended[:, 1]):.2f}, "
             f"{np.median(final[failed]):.2f} m from the goal; ending point's wall distance "
-            f"{np.median([wall_distance(env, e) for e in ended]):.2f} m (goals': "
+            f"{np.median([env.sim.arena.wall_distance(e) for e in ended]):.2f} m (goals': "
             f"{np.median(wall[failed]):.2f} m)"
         )
         print(
@@ -181,13 +180,18 @@ def main() -> int:
     stats = noise_and_mean(model, np.array(observations))
     if stats is not None:
         mean, noise = stats
+        near = np.array(distances) < NEAR_GOAL
         q = (0.1, 0.5, 0.9)
-        print(
-            "pre-squash |mean| quantiles 10/50/90 %: "
-            + ", ".join(f"{v:.2f}" for v in np.quantile(mean, q))
-            + "; gSDE noise std: "
-            + ", ".join(f"{v:.2f}" for v in np.quantile(noise, q))
-        )
+        for where, sel in (
+            ("all steps", slice(None)),
+            (f"within {NEAR_GOAL:g} m of the goal", near),
+        ):
+            print(
+                f"{where}: pre-squash |mean| quantiles 10/50/90 %: "
+                + ", ".join(f"{v:.2f}" for v in np.quantile(mean[sel], q))
+                + "; gSDE noise std: "
+                + ", ".join(f"{v:.2f}" for v in np.quantile(noise[sel], q))
+            )
     return 0
 
 

@@ -44,12 +44,6 @@ WALL_BINS = (0.0, 0.25, 0.4, 0.6, 10.0)
 """Edges (m) of the bins of the goal's distance to the nearest arena wall."""
 
 
-def wall_distance(bounds: tuple[float, float, float, float], xy: np.ndarray) -> float:
-    """Distance (m) from ``xy`` to the nearest of the walls at ``bounds`` (x0, y0, x1, y1)."""
-    x0, y0, x1, y1 = bounds
-    return float(min(xy[0] - x0, x1 - xy[0], xy[1] - y0, y1 - xy[1]))
-
-
 def by_wall_distance(arenas: list, results: list[Path]) -> None:
     """Prints the pooled episodes of ``results`` by their goal's distance to a wall."""
     rows = []
@@ -60,7 +54,7 @@ def by_wall_distance(arenas: list, results: list[Path]) -> None:
                 goal = np.asarray(arena.goal[:2])
                 rows.append(
                     (
-                        wall_distance(arena.bounds, goal),
+                        arena.wall_distance(goal),
                         e["success"],
                         e["collision"],
                         np.linalg.norm(np.asarray(e["end"]) - goal),

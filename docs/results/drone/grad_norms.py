@@ -36,47 +36,56 @@ def main() -> int:
         default="best_model.zip",
         help="the model in it (e.g. checkpoints/ppo_150000_steps.zip)",
     )
-    ap.add_argument("--n-envs", type=int, default=16)
+    ap.add_argument("--n-envs", type=int, help="envs of the rollout (default: the run's)")
     args = ap.parse_args()
     torch.set_num_threads(1)
-    settings = load_settings(args.run)
-    settings = {**settings, "curriculum": None}  # the whole task
-    venv = training_vec_env(settings, args.n_envs, "dummy", None)
+    settings = {**load_settings(args.run), "curriculum": None}  # the whole task
+    n_envs = (
+        args.n_envs or settings.get("n_envs") or 16
+    )  # 16: the sweep's runs before run.json held it
+    venv = training_vec_env(settings, n_envs, "dummy", None)
     stats = stats_path(args.run / args.model)
     venv = VecNormalize.load(str(stats), venv) if stats.exists() else venv
     venv.training = False
     model = PPO.load(args.run / args.model, env=venv, device="cpu")
-    model._setup_learn(model.n_steps * args.n_envs, _Nothing(), reset_num_timesteps=True)
-    callback = _Nothing()
-    callback.init_callback(model)
+    _, callback = model._setup_learn(model.n_steps * n_envs, _Nothing())
     model.collect_rollouts(venv, callback, model.rollout_buffer, model.n_steps)
     policy = model.policy
     pi_params = [p for n, p in policy.named_parameters() if "value" not in n]
     vf_params = [p for n, p in policy.named_parameters() if "value" in n]
+    clip = model.clip_range(model._current_progress_remaining)
     rows = []
     for data in model.rollout_buffer.get(model.batch_size):
         values, log_prob, _ = policy.evaluate_actions(data.observations, data.actions)
         adv = data.advantages
         adv = (adv - adv.mean()) / (adv.std() + 1e-8)
         ratio = torch.exp(log_prob - data.old_log_prob)
-        pg = -torch.min(adv * ratio, adv * torch.clamp(ratio, 0.9, 1.1)).mean()
+        pg = -torch.min(adv * ratio, adv * torch.clamp(ratio, 1 - clip, 1 + clip)).mean()
         vf = torch.nn.functional.mse_loss(data.returns, values.flatten())
         g_pi = torch.autograd.grad(pg, pi_params, allow_unused=True, retain_graph=True)
         g_vf = torch.autograd.grad(model.vf_coef * vf, vf_params, allow_unused=True)
         n_pi = torch.sqrt(sum((g**2).sum() for g in g_pi if g is not None)).item()
         n_vf = torch.sqrt(sum((g**2).sum() for g in g_vf if g is not None)).item()
-        total = (n_pi**2 + n_vf**2) ** 0.5
-        rows.append((n_pi, n_vf, min(1.0, model.max_grad_norm / total), vf.item()))
+        factor = min(1.0, model.max_grad_norm / (n_pi**2 + n_vf**2) ** 0.5)
+        rows.append((n_pi, n_vf, factor, n_pi * factor, vf.item()))
     r = np.array(rows)
-    q = lambda c: np.percentile(r[:, c], [10, 50, 90])
+    size = sum(p.numel() for p in pi_params)
     print(f"{args.run} ({args.model}), {len(r)} minibatches of {model.batch_size}")
     returns = model.rollout_buffer.returns
     print(f"returns: mean {returns.mean():.1f}, max {returns.max():.1f}")
-    print("policy-loss gradient norm (10/50/90 %):", np.round(q(0), 4))
-    print("value-loss gradient norm x vf_coef:    ", np.round(q(1), 2))
-    print(f"clip factor at max_grad_norm {model.max_grad_norm}:", np.round(q(2), 5))
-    print("policy gradient norm after clipping:  ", np.round(q(0) * q(2)[::-1], 6))
-    print("value loss:", np.round(q(3), 1))
+    print("per minibatch, quantiles 0/10/50/90/100 %:")
+    for column, (name, digits) in enumerate(
+        (
+            ("policy-loss gradient norm", 4),
+            ("value-loss gradient norm x vf_coef", 2),
+            (f"clip factor at max_grad_norm {model.max_grad_norm}", 5),
+            ("policy gradient norm after clipping", 6),
+            ("value loss", 1),
+        )
+    ):
+        print(f"  {name}:", np.round(np.percentile(r[:, column], [0, 10, 50, 90, 100]), digits))
+    rms = np.median(r[:, 3]) / size**0.5
+    print(f"policy gradient after clipping per parameter (RMS over {size}, median): {rms:.2g}")
     venv.close()
     return 0
 

@@ -4,9 +4,10 @@ how close the goal lies to a wall, how many collisions were with the block, wher
 episodes ended, and how saturated the actions are (for a tanh-squashed gSDE policy also the size
 of its pre-squash mean and exploration noise, over all steps and near the goal), success and
 collisions by the start's offset from the block's centre line (is the block straight ahead?),
-when the collisions happen, and how the failures without a collision end: short of the goal or
-stalled on the way, and whether the policy still pushes there (chattering: large actions that
-cancel out over the last seconds, the drone nearly still).
+when the collisions happen, whether a drone that reached the goal stays there, how close the
+failures without a collision came and how they end: short of the goal or stalled on the way, and
+whether the policy still pushes there (chattering: large actions that cancel out over the last
+seconds, the drone nearly still).
 
     PYTHONPATH=py_bridge .venv/bin/python docs/results/drone/failure_modes.py \\
         --model docs/results/drone/models/unempowered-d17 --episodes 100
@@ -86,7 +87,7 @@ def main() -> int:
             act.start(i)
             offset = abs(env.sim.arena.start[1] - env.sim.arena.block_y)
             done = False
-            flown, speeds = [], []
+            flown, speeds, closest = [], [], info["distance_to_goal"]
             while not done:
                 o = norm(obs)
                 action = act(o)
@@ -95,6 +96,7 @@ def main() -> int:
                 flown.append(action)
                 obs, _, terminated, truncated, info = env.step(action)
                 speeds.append(np.linalg.norm(env.sim.state().velocity[:2]))
+                closest = min(closest, info["distance_to_goal"])
                 done = terminated or truncated
             actions += flown
             tail = np.array(flown[-last:])
@@ -116,6 +118,7 @@ def main() -> int:
                     np.abs(tail).mean(),
                     np.linalg.norm(tail.mean(axis=0)),
                     np.mean(speeds[-last:]),
+                    closest,
                 )
             )
     finally:
@@ -123,7 +126,7 @@ def main() -> int:
     a = np.array(rows, dtype=float)
     wall, success, collision, final = a[:, 0], a[:, 1], a[:, 2], a[:, 3]
     ends, nearer_block, end_time, offset = a[:, 4:6], a[:, 8], a[:, 9], a[:, 10]
-    tail_size, tail_net, tail_speed = a[:, 11], a[:, 12], a[:, 13]
+    tail_size, tail_net, tail_speed, closest = a[:, 11], a[:, 12], a[:, 13], a[:, 14]
     print(f"# {path}: {len(a)} evaluation arenas, acting by its {args.action}\n")
     print(f"success {success.mean():.0%}, collisions {collision.mean():.0%}\n")
     binned_table(
@@ -175,6 +178,20 @@ def main() -> int:
                     f"{np.median(tail_size[sel]):.2f} | {np.median(tail_net[sel]):.2f} | "
                     f"{np.median(tail_speed[sel]):.3f} |"
                 )
+    reached = (success == 1) & (collision == 0)
+    if reached.any():
+        left = reached & (final >= env.success_radius)
+        print(
+            f"\nholding the goal: {left.sum()} of {reached.sum()} successes end farther than "
+            f"{env.success_radius:g} m from it (final distance quantiles 10/50/90 %: "
+            + ", ".join(f"{v:.2f}" for v in np.quantile(final[reached], (0.1, 0.5, 0.9)))
+            + " m)"
+        )
+    if failed.any():
+        print(
+            "failed without a collision, closest approach to the goal (m) quantiles 10/50/90 %: "
+            + ", ".join(f"{v:.2f}" for v in np.quantile(closest[failed], (0.1, 0.5, 0.9)))
+        )
     acts = np.abs(np.array(actions))
     print(f"\nactions saturated (|a| > {SATURATED}): {np.mean(acts > SATURATED):.0%} of components")
     stats = noise_and_mean(model, np.array(observations))

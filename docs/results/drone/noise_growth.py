@@ -5,8 +5,8 @@ checkpoints, on one fixed set of states, prints the median norm ``|z(s)|``, the 
 the median noise std before the squashing: which of the two moves the noise.
 
 The states are the first seconds of flights on the first evaluation arenas under random actions
-held for gSDE's 8 steps (the same states for every checkpoint, each normalised by that
-checkpoint's own statistics).
+held for the run's gSDE resampling period (the same states for every checkpoint, each normalised
+by that checkpoint's own statistics).
 
     PYTHONPATH=py_bridge .venv/bin/python docs/results/drone/noise_growth.py runs/sweep/d110-gradnorm-seed11
 """
@@ -21,25 +21,29 @@ import numpy as np
 import torch
 from cstep_bridge.env import CStepDroneEnv
 from cstep_bridge.flights import configurations, reset_options
+from cstep_bridge.noise_cap import state_noise
 from cstep_bridge.normalization import observation_normalizer
+from cstep_bridge.train import load_settings
 from stable_baselines3 import PPO
 
-HOLD = 8
-"""Steps a random action is held (gSDE's resampling period in `tuned.yml`)."""
+
+def checkpoint_steps(path: Path) -> int:
+    """The training steps in a checkpoint's name (``ppo_<steps>_steps.zip``)."""
+    return int(re.search(r"ppo_(\d+)_steps", path.name).group(1))
 
 
-def random_flight_states(arenas: int, steps: int, seed: int) -> np.ndarray:
-    """Raw observations of flights under random held actions on the first ``arenas`` evaluation
-    arenas, at most ``steps`` each."""
+def random_flight_states(arenas: int, steps: int, hold: int, seed: int) -> np.ndarray:
+    """Raw observations of flights under random actions held for ``hold`` steps on the first
+    ``arenas`` evaluation arenas, at most ``steps`` each."""
     rng = np.random.default_rng(seed)
-    env = CStepDroneEnv()
+    env = CStepDroneEnv(empowered=False)
     states = []
     try:
         for config in configurations("drone")[:arenas]:
             obs, _ = env.reset(options=reset_options("drone", config))
             for t in range(steps):
                 states.append(obs)
-                if t % HOLD == 0:
+                if t % hold == 0:
                     action = rng.uniform(-1.0, 1.0, 2)
                 obs, _, terminated, truncated, _ = env.step(action)
                 if terminated or truncated:
@@ -63,11 +67,10 @@ def noise_parts(model_path: Path, raw_states: np.ndarray) -> tuple[float, float,
         )
         latent = policy.mlp_extractor.forward_actor(features)
         sigma = policy.action_dist.get_std(policy.log_std)
-        std = ((latent**2) @ (sigma**2)).sqrt()
     return (
         float(latent.norm(dim=1).median()),
         float(sigma.pow(2).mean().sqrt()),
-        float(std.median()),
+        float(state_noise(policy, states).scale.median()),
     )
 
 
@@ -78,20 +81,17 @@ def main() -> int:
     ap.add_argument("--steps", type=int, default=300, help="steps per flight at most (300)")
     ap.add_argument("--seed", type=int, default=0, help="seed of the random actions")
     args = ap.parse_args()
-    checkpoints = sorted(
-        (args.run / "checkpoints").glob("ppo_*_steps.zip"),
-        key=lambda p: int(re.search(r"ppo_(\d+)_steps", p.name).group(1)),
-    )
+    checkpoints = sorted((args.run / "checkpoints").glob("ppo_*_steps.zip"), key=checkpoint_steps)
     if not checkpoints:
         raise SystemExit(f"{args.run}/checkpoints: no ppo_<steps>_steps.zip")
-    states = random_flight_states(args.arenas, args.steps, args.seed)
+    hold = max(1, load_settings(args.run)["sde_sample_freq"])
+    states = random_flight_states(args.arenas, args.steps, hold, args.seed)
     print(f"# {args.run}: {len(states)} states of random flights on {args.arenas} arenas\n")
     print("| checkpoint (steps) | median abs(z) | RMS sigma | median noise std (pre-squash) |")
     print("|---:|---:|---:|---:|")
     for path in checkpoints:
-        steps = re.search(r"ppo_(\d+)_steps", path.name).group(1)
         z, sigma, std = noise_parts(path, states)
-        print(f"| {steps} | {z:.1f} | {sigma:.3f} | {std:.2f} |")
+        print(f"| {checkpoint_steps(path)} | {z:.1f} | {sigma:.3f} | {std:.2f} |")
     return 0
 
 

@@ -9,7 +9,7 @@ Reward: ``exp(−‖p − goal‖)`` (``empowered=False``) or the node's empower
 > 0.9 rad; truncates at 30 s. What a collision costs an empowered agent is ``collision_value``
 (:mod:`~cstep_bridge.collision`): nothing more (``"none"``, the paper as written) or the node's
 floor reward held for the steps the episode had left (``"floor"``). ``info``: success (came
-within ``success_radius`` of the goal), collision, time, min_obstacle_distance (centre to
+within ``success_radius`` of the goal), at_goal (is within it now), collision, time, min_obstacle_distance (centre to
 nearest wall or block face, m), distance_to_goal (m), position (x, y, m).
 
 :class:`EmpoweredRewardEnv` holds what this env shares with the point maze
@@ -220,7 +220,8 @@ class EmpoweredRewardEnv(gym.Env):
         """After a step: the scan, the reward and the ``info`` of ``state`` (success updated)."""
         ranges = self.sim.scan(state)
         info = self._info(state, collision)
-        self.success = self.success or info["distance_to_goal"] < self.success_radius
+        info["at_goal"] = info["distance_to_goal"] < self.success_radius
+        self.success = self.success or info["at_goal"]
         info["success"] = self.success
         reward = self._reward(state, ranges, self.sim.time, info["distance_to_goal"], info)
         return ranges, reward, info

@@ -38,7 +38,7 @@ on, where 0.8 s stays inside it up to 1.75 m/s.
 
 Observation (184 values, float32): goal − position (2, m), velocity (2, m/s), the 180 LiDAR
 ranges clipped to [0, 3] m (no return = 3 m), from the ball's centre. ``info``: as the drone env's
-(success, collision, time, min_obstacle_distance, distance_to_goal) plus position (x, y).
+(success, at_goal, collision, time, min_obstacle_distance, distance_to_goal) plus position (x, y).
 """
 
 from __future__ import annotations

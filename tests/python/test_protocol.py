@@ -255,6 +255,46 @@ def test_only_the_levels_own_episodes_promote_and_promotions_are_kept_by_step(tm
     assert curriculum.level_at(tmp_path / "none.json", 10) == 0
 
 
+def test_a_held_curriculum_counts_only_episodes_that_end_at_the_goal(tmp_path):
+    """``promote_on: held``: an episode that passed the goal (success) but ended away from it
+    does not move the level up; one that ended within the success radius does. The env reports
+    ``at_goal`` for the step itself while ``success`` stays set once reached."""
+    venv = make_vec_env(lambda: make_env("drone", empowered=False), n_envs=1, seed=3)
+    plan = curriculum.Curriculum.from_settings(
+        {"levels": [0.3, 1.0], "promote_at": 1.0, "window": 3, "promote_on": "held"}
+    )
+    try:
+        model = PPO("MlpPolicy", venv, n_steps=16, batch_size=16, n_epochs=1, device="cpu")
+        callback = curriculum.make_callback(plan, tmp_path / "c.json")
+        model.learn(16, callback=callback)
+
+        def finish_episodes(at_goal: bool, count: int) -> None:
+            for _ in range(count):
+                ended = {"episode": {}, "success": True, "at_goal": at_goal, "collision": False}
+                callback.locals = {"infos": [{**ended, "episode_goal_fraction": 0.2}]}
+                callback.on_step()
+
+        finish_episodes(False, 5)
+        assert callback.level == 0
+        finish_episodes(True, 3)
+        assert callback.level == 1
+
+        env = venv.envs[0].unwrapped  # the real env: at_goal is this step's, success sticky
+        env.goal_fraction = 1.0
+        env.reset(seed=5)
+        env.success_radius = 1e9  # every point is "at" the goal
+        _, _, _, _, info = env.step(np.zeros(2, dtype=np.float32))
+        assert info["at_goal"] and info["success"]
+        env.success_radius = 1e-9
+        _, _, _, _, info = env.step(np.zeros(2, dtype=np.float32))
+        assert not info["at_goal"] and info["success"]
+        assert info["distance_to_goal"] > env.success_radius
+    finally:
+        venv.close()
+    with pytest.raises(ValueError, match="promote_on must be one of"):
+        curriculum.Curriculum.from_settings({"levels": [0.5, 1.0], "promote_on": "hovered"})
+
+
 def test_the_curriculum_callback_moves_the_training_envs_goals(tmp_path):
     """The level reaches the env itself through its Monitor wrapper, and the goals it draws."""
     venv = make_vec_env(lambda: make_env("drone", empowered=False), n_envs=2, seed=3)

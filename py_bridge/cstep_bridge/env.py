@@ -187,15 +187,18 @@ class EmpoweredRewardEnv(gym.Env):
         return float(np.linalg.norm(self.sim.goal - state.position))
 
     def _info(self, state: DroneState, collision: bool) -> dict[str, Any]:
-        """What every step reports: success so far, collision, sim time, centre distance to the
-        nearest obstacle, distance to the goal, the position (x, y), and how far along its
-        start–goal line the episode's goal lies (1 = the task's own goal)."""
+        """What every step reports: success so far, whether the robot is within the success radius
+        now, collision, sim time, centre distance to the nearest obstacle, distance to the goal,
+        the position (x, y), and how far along its start–goal line the episode's goal lies (1 =
+        the task's own goal)."""
+        distance = self._distance(state)
         return {
             "success": self.success,
+            "at_goal": distance < self.success_radius,
             "collision": collision,
             "time": self.sim.time,
             "min_obstacle_distance": self.sim.min_obstacle_distance(state),
-            "distance_to_goal": self._distance(state),
+            "distance_to_goal": distance,
             "position": (float(state.position[0]), float(state.position[1])),
             "episode_goal_fraction": self.episode_goal_fraction,
         }
@@ -220,7 +223,6 @@ class EmpoweredRewardEnv(gym.Env):
         """After a step: the scan, the reward and the ``info`` of ``state`` (success updated)."""
         ranges = self.sim.scan(state)
         info = self._info(state, collision)
-        info["at_goal"] = info["distance_to_goal"] < self.success_radius
         self.success = self.success or info["at_goal"]
         info["success"] = self.success
         reward = self._reward(state, ranges, self.sim.time, info["distance_to_goal"], info)

@@ -123,6 +123,7 @@ def test_check_env_on_the_unempowered_maze():
         assert obs.shape == (184,) and np.all(np.isfinite(obs))
         assert set(info) == {
             "success",
+            "at_goal",
             "collision",
             "time",
             "min_obstacle_distance",

@@ -28,7 +28,10 @@ PHASES = (
     ("d34–d49: 16 envs, goal curriculum", 34, 49),
     ("d50–d105: reverse curriculum (start moves)", 50, 105),
     ("d106–d109: tuned.yml before 2026-12-05 (goal curriculum, 8 envs)", 106, 109),
-    ("d110 on: reverse curriculum, max_grad_norm 1000", 110, 999),
+    ("d110–d119: reverse curriculum, max_grad_norm 1000", 110, 119),
+    ("d120–d133: + log std −2 (d120–d121) or GAE λ 0.9 (d124–d133)", 120, 133),
+    ("d134–d137: + noise cap 5 → 0.5", 134, 143),
+    ("d144 on: + curriculum promoting on holding the goal", 144, 999),
 )
 """The sweep's phases by run number: (label, first, last); the last is open to the runs to come."""
 

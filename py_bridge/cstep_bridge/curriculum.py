@@ -45,7 +45,7 @@ Configured by a protocol's ``curriculum`` entry (see :mod:`~cstep_bridge.protoco
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 from pathlib import Path
 from typing import Any
 
@@ -78,8 +78,7 @@ class Curriculum:
         """The curriculum of a run's ``curriculum`` setting; None when it has none."""
         if not value:
             return None
-        known = {"levels", "promote_at", "window", "full_task_share", "moves", "promote_on"}
-        unknown = set(value) - known
+        unknown = set(value) - {f.name for f in fields(cls)}
         if unknown:
             raise ValueError(f"curriculum: unknown keys {sorted(unknown)}")
         levels = tuple(float(v) for v in value.get("levels", (0.25, 0.5, 0.75, 1.0)))
@@ -99,7 +98,7 @@ class Curriculum:
         moves = str(value.get("moves", "goal"))
         if moves not in MOVES:
             raise ValueError(f"curriculum: moves must be one of {MOVES}, not {moves!r}")
-        promote_on = str(value.get("promote_on", "reached"))
+        promote_on = str(value.get("promote_on", cls.promote_on))
         if promote_on not in PROMOTE_ON:
             raise ValueError(
                 f"curriculum: promote_on must be one of {PROMOTE_ON}, not {promote_on!r}"
@@ -109,8 +108,8 @@ class Curriculum:
 
 def counts(promote_on: str, info: dict[str, Any]) -> bool:
     """Whether the episode whose last step's ``info`` this is counts toward moving up."""
-    done = info["at_goal"] if promote_on == "held" else info["success"]
-    return bool(done and not info["collision"])
+    arrived = info["at_goal"] if promote_on == "held" else info["success"]
+    return bool(arrived and not info["collision"])
 
 
 def partway_goal(start: np.ndarray, goal: np.ndarray, fraction: float, clearance) -> np.ndarray:

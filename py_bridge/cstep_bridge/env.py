@@ -9,8 +9,9 @@ Reward: ``exp(−‖p − goal‖)`` (``empowered=False``) or the node's empower
 > 0.9 rad; truncates at 30 s. What a collision costs an empowered agent is ``collision_value``
 (:mod:`~cstep_bridge.collision`): nothing more (``"none"``, the paper as written) or the node's
 floor reward held for the steps the episode had left (``"floor"``). ``info``: success (came
-within ``success_radius`` of the goal), at_goal (is within it now), collision, time, min_obstacle_distance (centre to
-nearest wall or block face, m), distance_to_goal (m), position (x, y, m).
+within ``success_radius`` of the goal), at_goal (is within it now), collision, time,
+min_obstacle_distance (centre to nearest wall or block face, m), distance_to_goal (m), position
+(x, y, m).
 
 :class:`EmpoweredRewardEnv` holds what this env shares with the point maze
 (:mod:`~cstep_bridge.maze`): the choice of reward and the bridge to the node.

@@ -33,7 +33,8 @@ PHASES = (
     ("d134–d137: + noise cap 5 → 0.5", 134, 143),
     ("d144–d151: + curriculum promoting on holding the goal (d150–d151: 2 M steps)", 144, 151),
     ("d152–d155: + GAE λ 0.98", 152, 155),
-    ("d156 on: reverse curriculum, max_grad_norm 1000, 2 M steps", 156, 999),
+    ("d156–d163: reverse curriculum, max_grad_norm 1000, 2 M steps", 156, 165),
+    ("d166 on: + curriculum promoting on holding the goal, raw observations", 166, 999),
 )
 """The sweep's phases by run number: (label, first, last); the last is open to the runs to come."""
 

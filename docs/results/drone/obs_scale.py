@@ -1,16 +1,17 @@
 """How a run's observation normalisation scales the goal: the running mean and standard deviation
-that its ``VecNormalize`` kept for the goal-relative position (the observation's first three
-entries, ``goal − position``, m), and where a full-task start then lands in the network's input:
+that its ``VecNormalize`` kept for the goal-relative position (the observation's first entries,
+``goal − position`` in m, x and y), and where a full-task start then lands in the network's input:
 
     PYTHONPATH=py_bridge .venv/bin/python docs/results/drone/obs_scale.py \\
         runs/sweep/d110-gradnorm-seed11 runs/sweep/d144-gradnorm-held-seed11
 
 Why: ``VecNormalize`` keeps a cumulative mean and variance over every step it has seen, so a
 curriculum's first levels (starts near the goal) weigh in its statistics for the rest of the run.
-A run that spends 600 k steps there keeps a small scale for ``goal − position`` and the full
-task's starts, 2.7–4.5 m short of their goals in x, reach the network several standard deviations out. The
-table gives, per run, the steps the statistics have seen, the mean and standard deviation of the
-x and y offsets, and the normalised x offset of a start 3.5 m short of its goal in x.
+A run that spends 600 k steps there keeps a small scale for ``goal − position``, and the full
+task's starts, 2.7–4.5 m short of their goals in x, reach the network several standard deviations
+out. The table gives, per run, the steps the statistics have seen, the mean and standard deviation
+of the x and y offsets, and the normalised x offset of a start :data:`FULL_TASK_DX` short of its
+goal.
 """
 
 from __future__ import annotations
@@ -39,7 +40,8 @@ def main() -> int:
     ap.add_argument("runs", nargs="+", type=Path, help="run directories")
     args = ap.parse_args()
     print(
-        "| run | steps seen | mean dx, dy (m) | std dx, dy (m) | a 3.5 m start's dx, normalised |"
+        "| run | steps seen | mean dx, dy (m) | std dx, dy (m) "
+        f"| a {FULL_TASK_DX:g} m start's dx, normalised |"
     )
     print("|---|---:|---|---|---:|")
     for run in args.runs:

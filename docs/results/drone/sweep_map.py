@@ -105,6 +105,9 @@ def main() -> int:
     fig.tight_layout()
     fig.savefig(args.out, dpi=120)
     print(f"wrote {args.out}: {len(found)} runs")
+    best = max(found, key=lambda r: found[r][0] - found[r][1])
+    success, collisions = found[best]
+    print(f"largest success − collisions: {best}, {success:g} % − {collisions:g} %")
     return 0
 
 

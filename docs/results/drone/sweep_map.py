@@ -34,7 +34,12 @@ PHASES = (
     ("d144–d151: + curriculum promoting on holding the goal (d150–d151: 2 M steps)", 144, 151),
     ("d152–d155: + GAE λ 0.98", 152, 155),
     ("d156–d163: reverse curriculum, max_grad_norm 1000, 2 M steps", 156, 165),
-    ("d166 on: + curriculum promoting on holding the goal, raw observations", 166, 999),
+    ("d166–d169: + curriculum promoting on holding the goal, raw observations", 166, 169),
+    ("d170–d179: + γ 0.99", 170, 179),
+    ("d180–d189: + gSDE resampled every 4 steps", 180, 189),
+    ("d190–d199: + minibatches of 1 024", 190, 199),
+    ("d200–d209: + minibatches of 128", 200, 209),
+    ("d210 on: + learning rate from 2e-4", 210, 999),
 )
 """The sweep's phases by run number: (label, first, last); the last is open to the runs to come."""
 

@@ -45,6 +45,8 @@ PHASES = (
 
 BAR_SUCCESS, BAR_COLLISIONS = 85.0, 5.0
 """The issue's drone bar, in percent of the 100 arenas."""
+MARKERS = "os^Dv"
+"""Marker shapes the phases cycle through beside their colours."""
 
 
 def runs(protocol: Path) -> dict[str, tuple[float, float]]:
@@ -87,17 +89,20 @@ def main() -> int:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, ax = plt.subplots(figsize=(7.5, 5.5))
+    fig, ax = plt.subplots(figsize=(11.5, 6))
     ax.add_patch(
         plt.Rectangle(
             (0, BAR_SUCCESS), BAR_COLLISIONS, 100 - BAR_SUCCESS, color="tab:green", alpha=0.2
         )
     )
     ax.text(0.5, 93, "issue's bar", color="tab:green", fontsize=9)
-    for label, members in by_phase(found).items():
+    colors = plt.get_cmap("tab20").colors
+    for i, (label, members) in enumerate(by_phase(found).items()):
         xs = [found[r][1] for r in members]
         ys = [found[r][0] for r in members]
-        ax.scatter(xs, ys, label=f"{label} ({len(members)})", s=28)
+        # More phases than a colour cycle: colour and marker together tell them apart.
+        style = {"color": colors[i % len(colors)], "marker": MARKERS[i % len(MARKERS)]}
+        ax.scatter(xs, ys, label=f"{label} ({len(members)})", s=28, **style)
         for r, x, y in zip(members, xs, ys, strict=True):
             ax.annotate(r, (x, y), fontsize=6, xytext=(2, 2), textcoords="offset points")
     ax.set_xlabel("collisions on the 100 arenas (%)")
@@ -105,7 +110,7 @@ def main() -> int:
     ax.set_xlim(-2, max(50.0, max(c for _, c in found.values()) + 5))
     ax.set_ylim(-2, 100)
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=8, loc="upper right")
+    ax.legend(fontsize=8, loc="center left", bbox_to_anchor=(1.01, 0.5))
     ax.set_title("Drone sweep: every evaluated run (unempowered, docs/results/protocol.md)")
     fig.tight_layout()
     fig.savefig(args.out, dpi=120)

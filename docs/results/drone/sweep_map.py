@@ -39,7 +39,8 @@ PHASES = (
     ("d180–d189: + gSDE resampled every 4 steps", 180, 189),
     ("d190–d199: + minibatches of 1 024", 190, 199),
     ("d200–d209: + minibatches of 128", 200, 209),
-    ("d210 on: + learning rate from 2e-4", 210, 999),
+    ("d210–d219: + learning rate from 2e-4", 210, 219),
+    ("d220 on: + a 512-512 network", 220, 999),
 )
 """The sweep's phases by run number: (label, first, last); the last is open to the runs to come."""
 

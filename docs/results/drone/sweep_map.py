@@ -40,7 +40,8 @@ PHASES = (
     ("d190–d199: + minibatches of 1 024", 190, 199),
     ("d200–d209: + minibatches of 128", 200, 209),
     ("d210–d219: + learning rate from 2e-4", 210, 219),
-    ("d220 on: + a 512-512 network", 220, 999),
+    ("d220–d229: + a 512-512 network", 220, 229),
+    ("d230 on: + γ 0.998", 230, 999),
 )
 """The sweep's phases by run number: (label, first, last); the last is open to the runs to come."""
 

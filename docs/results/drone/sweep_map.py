@@ -41,7 +41,9 @@ PHASES = (
     ("d200–d209: + minibatches of 128", 200, 209),
     ("d210–d219: + learning rate from 2e-4", 210, 219),
     ("d220–d229: + a 512-512 network", 220, 229),
-    ("d230 on: + γ 0.998", 230, 999),
+    ("d230–d239: + γ 0.998", 230, 239),
+    ("d240–d249: + n_steps 128", 240, 249),
+    ("d250 on: + n_steps 512 (tuned.yml since d259)", 250, 999),
 )
 """The sweep's phases by run number: (label, first, last); the last is open to the runs to come."""
 

@@ -43,7 +43,7 @@ PHASES = (
     ("d220–d229: + a 512-512 network", 220, 229),
     ("d230–d239: + γ 0.998", 230, 239),
     ("d240–d249: + n_steps 128", 240, 249),
-    ("d250 on: + n_steps 512 (tuned.yml since d259)", 250, 999),
+    ("d250 on: + n_steps 512 (tuned.yml since their read)", 250, 999),
 )
 """The sweep's phases by run number: (label, first, last); the last is open to the runs to come."""
 

@@ -43,7 +43,10 @@ PHASES = (
     ("d220–d229: + a 512-512 network", 220, 229),
     ("d230–d239: + γ 0.998", 230, 239),
     ("d240–d249: + n_steps 128", 240, 249),
-    ("d250 on: + n_steps 512 (tuned.yml since their read)", 250, 999),
+    ("d250–d259: + n_steps 512 (tuned.yml since their read)", 250, 259),
+    ("d260–d269: tuned.yml + n_steps 1024", 260, 269),
+    ("d270–d279: tuned.yml + clip range 0.2", 270, 279),
+    ("d280 on: tuned.yml over 2 M steps", 280, 999),
 )
 """The sweep's phases by run number: (label, first, last); the last is open to the runs to come."""
 

@@ -46,7 +46,8 @@ PHASES = (
     ("d250–d259: + n_steps 512 (tuned.yml since their read)", 250, 259),
     ("d260–d269: tuned.yml + n_steps 1024", 260, 269),
     ("d270–d279: tuned.yml + clip range 0.2", 270, 279),
-    ("d280 on: tuned.yml over 2 M steps", 280, 999),
+    ("d280–d289: tuned.yml over 2 M steps", 280, 289),
+    ("d290 on: tuned.yml + curriculum promoting at 80 %", 290, 999),
 )
 """The sweep's phases by run number: (label, first, last); the last is open to the runs to come."""
 

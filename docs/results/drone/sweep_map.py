@@ -47,9 +47,10 @@ PHASES = (
     ("d260–d269: tuned.yml + n_steps 1024", 260, 269),
     ("d270–d279: tuned.yml + clip range 0.2", 270, 279),
     ("d280–d289: tuned.yml over 2 M steps", 280, 289),
-    ("d290 on: tuned.yml + curriculum promoting at 80 %", 290, 999),
+    ("d290–d297: tuned.yml + curriculum promoting at 80 %", 290, 299),
 )
-"""The sweep's phases by run number: (label, first, last); the last is open to the runs to come."""
+"""The sweep's phases by run number: (label, first, last); a run in none stops the script, so each
+new screen adds its phase here."""
 
 BAR_SUCCESS, BAR_COLLISIONS = 85.0, 5.0
 """The issue's drone bar, in percent of the 100 arenas."""

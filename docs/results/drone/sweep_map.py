@@ -48,7 +48,7 @@ PHASES = (
     ("d270–d279: tuned.yml + clip range 0.2", 270, 279),
     ("d280–d289: tuned.yml over 2 M steps", 280, 289),
     ("d290–d297: tuned.yml + curriculum promoting at 80 %", 290, 299),
-    ("d300–d309: tuned.yml + 5 epochs", 300, 309),
+    ("d300–d305: tuned.yml + 5 epochs", 300, 309),
 )
 """The sweep's phases by run number: (label, first, last); a run in none stops the script, so each
 new screen adds its phase here."""

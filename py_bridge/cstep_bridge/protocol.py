@@ -4,9 +4,10 @@ A protocol file follows rl-baselines3-zoo's layout: one section per environment 
 argument names (``n_timesteps``, ``n_envs``, ``n_steps``, ``learning_rate`` as a number or
 ``lin_<value>`` for a linear decay to 0, ``normalize``, ``policy_kwargs``, ...). Two differences
 from rl-zoo, on purpose: ``policy_kwargs`` and ``normalize`` are YAML mappings rather than Python
-source to ``eval``, and three keys are ours: ``collision_value`` (what a collision is worth, see
+source to ``eval``, and four keys are ours: ``collision_value`` (what a collision is worth, see
 :mod:`~cstep_bridge.collision`), ``curriculum`` (see :mod:`~cstep_bridge.curriculum`) and
-``validation`` (see :mod:`~cstep_bridge.selection`).
+``validation`` (see :mod:`~cstep_bridge.selection`) and ``observation`` (the encoding the policy
+sees, see :mod:`~cstep_bridge.observation`).
 
 :func:`settings` flattens a section into the run settings that ``run.json`` stores; the trainer's
 command-line options and ``--hyperparams KEY=VALUE`` override single entries.
@@ -51,6 +52,7 @@ _DEFAULTS: dict[str, Any] = {
     "curriculum": None,
     "validation": None,
     "noise_cap": None,
+    "observation": "raw",
 }
 SETTING_NAMES = (
     "net",
@@ -79,6 +81,7 @@ SETTING_NAMES = (
     "curriculum",
     "validation",
     "noise_cap",
+    "observation",
 )
 """The run settings a protocol section becomes (:func:`settings`), in ``run.json``'s order."""
 _POLICY_KEYS = {
@@ -148,6 +151,7 @@ def settings(hyper: dict[str, Any]) -> dict[str, Any]:
         "curriculum": hyper["curriculum"],
         "validation": hyper["validation"],
         "noise_cap": hyper["noise_cap"],
+        "observation": str(hyper["observation"]),
     }
     check(out)
     return out

@@ -159,8 +159,10 @@ def run_settings(args: argparse.Namespace) -> dict[str, Any]:
     protocol.check(settings)
     from .curriculum import Curriculum
     from .noise_cap import NoiseCap
+    from .observation import check as check_observation
     from .selection import Validation
 
+    check_observation(settings["observation"], args.env)
     Curriculum.from_settings(settings["curriculum"])  # raises ValueError naming what is wrong
     Validation.from_settings(settings["validation"])
     NoiseCap.from_settings(settings["noise_cap"])
@@ -377,8 +379,11 @@ def _callbacks(out: Path, settings: dict[str, Any]):
 def _policy_kwargs(settings: dict[str, Any]) -> dict[str, Any]:
     import torch
 
+    from .observation import policy_kwargs as encoding_kwargs
+
     net = settings["net"]
     return {
+        **encoding_kwargs(settings.get("observation", "raw")),  # absent in older runs
         "net_arch": {"pi": net, "vf": net},
         "activation_fn": {"tanh": torch.nn.Tanh, "relu": torch.nn.ReLU}[settings["activation"]],
         "log_std_init": settings["log_std_init"],
@@ -455,6 +460,7 @@ def train(args: argparse.Namespace) -> Path:
     from stable_baselines3 import PPO
     from stable_baselines3.common.vec_env import VecNormalize
 
+    from .observation import normalizer_class
     from .plots import training_curve
 
     out: Path = args.out
@@ -490,7 +496,7 @@ def train(args: argparse.Namespace) -> Path:
         if stats is not None and stats.exists():
             vec_env = VecNormalize.load(str(stats), vec_env)
         else:
-            vec_env = VecNormalize(
+            vec_env = normalizer_class(settings.get("observation", "raw"))(
                 vec_env,
                 norm_obs=settings["norm_obs"],
                 norm_reward=settings["norm_reward"],

@@ -202,3 +202,145 @@ def versus_baseline(
         test = mcnemar if name == "success" else wilcoxon_paired
         tests[name] = test(metric_matrix(baseline, value), metric_matrix(runs, value))
     return tests
+
+
+# --- Over seeds: the run is the unit -------------------------------------------------------------
+# A training seed is one draw of the whole training process; a reviewer asks how an agent does
+# over such draws (Agarwal et al. 2021, "Deep RL at the edge of the statistical precipice"): the
+# mean and the interquartile mean of the per-seed scores with percentile-bootstrap intervals over
+# the seeds, and the probability that a seed of one agent beats a seed of another. SciPy's
+# ``bootstrap`` and ``trim_mean`` give all three; rliable would add pandas, seaborn and arch for
+# what on one task is resampling seeds.
+
+SEED_STATISTICS = ("mean", "iqm")
+"""The statistics of per-seed scores :func:`seed_interval` gives: the mean, and the interquartile
+mean (the mean of the middle half, robust to a seed that came apart)."""
+
+
+def seed_scores(values: np.ndarray) -> np.ndarray:
+    """Each seed's mean over its configurations (seeds × configurations; NaN = no value)."""
+    return _seed_means(np.asarray(values, dtype=float).T)
+
+
+def _statistic(name: str) -> Callable[..., np.ndarray]:
+    if name == "mean":
+        return lambda x, axis=-1: np.mean(x, axis=axis)
+    if name == "iqm":
+        return lambda x, axis=-1: stats.trim_mean(x, 0.25, axis=axis)
+    raise ValueError(f"statistic must be one of {SEED_STATISTICS}, not {name!r}")
+
+
+def seed_interval(
+    scores: Sequence[float],
+    statistic: str = "mean",
+    confidence: float = CONFIDENCE,
+    resamples: int = RESAMPLES,
+    seed: int = RNG_SEED,
+) -> Interval:
+    """``statistic`` (one of :data:`SEED_STATISTICS`) of per-seed ``scores`` with its percentile
+    bootstrap interval over the seeds (seeded: the same scores give the same interval). One seed,
+    or seeds that all agree, give a point."""
+    x = np.asarray(scores, dtype=float)
+    if x.ndim != 1 or x.size == 0 or not np.all(np.isfinite(x)):
+        raise ValueError(f"scores must be finite per-seed values, not {scores!r}")
+    fn = _statistic(statistic)
+    value = float(fn(x))
+    if x.size == 1 or np.all(x == x[0]):
+        return Interval(value, value, value)
+    res = stats.bootstrap(
+        (x,),
+        fn,
+        confidence_level=confidence,
+        n_resamples=resamples,
+        method="percentile",
+        rng=np.random.default_rng(seed),
+    )
+    return Interval(value, float(res.confidence_interval.low), float(res.confidence_interval.high))
+
+
+def _improvement(baseline: np.ndarray, agent: np.ndarray, axis: int = -1) -> np.ndarray:
+    """P(a seed of ``agent`` scores above a seed of ``baseline``), ties counting half: the
+    Mann-Whitney U statistic over all seed pairs, divided by their number."""
+    a = np.moveaxis(baseline, axis, -1)[..., None, :]
+    b = np.moveaxis(agent, axis, -1)[..., :, None]
+    return np.mean((b > a) + 0.5 * (b == a), axis=(-2, -1))
+
+
+def probability_of_improvement(
+    baseline: Sequence[float],
+    agent: Sequence[float],
+    confidence: float = CONFIDENCE,
+    resamples: int = RESAMPLES,
+    seed: int = RNG_SEED,
+) -> Interval:
+    """How likely a seed of ``agent`` beats a seed of ``baseline`` (per-seed scores; 0.5: neither
+    is better), with a percentile bootstrap interval that resamples each agent's seeds apart."""
+    a, b = np.asarray(baseline, dtype=float), np.asarray(agent, dtype=float)
+    value = float(_improvement(a, b))
+    if a.size < 2 or b.size < 2 or np.all(np.concatenate([a, b]) == a[0]):
+        return Interval(value, value, value)
+    res = stats.bootstrap(
+        (a, b),
+        _improvement,
+        confidence_level=confidence,
+        n_resamples=resamples,
+        method="percentile",
+        rng=np.random.default_rng(seed),
+    )
+    return Interval(value, float(res.confidence_interval.low), float(res.confidence_interval.high))
+
+
+SEED_SCORES = ("success", "collision", "success_minus_collision")
+"""The per-seed scores (percent of the configurations) :func:`over_seeds` reads: success,
+collisions and the sweep's score, success − collisions."""
+
+
+@dataclass
+class SeedRead:
+    """One agent over its training seeds: each seed's scores (percent), the mean and the
+    interquartile mean of each with bootstrap intervals over the seeds, and (for every agent but
+    the baseline) the probability that one of its seeds beats one of the baseline's."""
+
+    seeds: list[int | None]
+    scores: dict[str, list[float]]
+    mean: dict[str, Interval]
+    iqm: dict[str, Interval]
+    improvement: dict[str, Interval] | None
+
+
+def over_seeds(
+    runs: dict[str, Sequence[Sequence[metrics.Episode]]],
+    seeds: dict[str, Sequence[int | None]],
+) -> dict[str, SeedRead]:
+    """Per agent (by label; the first is the baseline), the :class:`SeedRead` of its ``runs``
+    (one list of episodes per seed) with their training ``seeds``. Collisions count as an
+    improvement when fewer."""
+    reads: dict[str, SeedRead] = {}
+    baseline: dict[str, np.ndarray] | None = None
+    for label, agent_runs in runs.items():
+        success = 100 * seed_scores(metric_matrix(agent_runs, lambda e: float(e.success)))
+        collision = 100 * seed_scores(metric_matrix(agent_runs, lambda e: float(e.collision)))
+        scores = {
+            "success": success,
+            "collision": collision,
+            "success_minus_collision": success - collision,
+        }
+        improvement = None
+        if baseline is None:
+            baseline = scores
+        else:
+            improvement = {
+                name: probability_of_improvement(
+                    -baseline[name] if name == "collision" else baseline[name],
+                    -scores[name] if name == "collision" else scores[name],
+                )
+                for name in SEED_SCORES
+            }
+        reads[label] = SeedRead(
+            seeds=list(seeds[label]),
+            scores={k: [float(v) for v in x] for k, x in scores.items()},
+            mean={k: seed_interval(x, "mean") for k, x in scores.items()},
+            iqm={k: seed_interval(x, "iqm") for k, x in scores.items()},
+            improvement=improvement,
+        )
+    return reads

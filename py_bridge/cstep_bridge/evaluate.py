@@ -47,7 +47,7 @@ from .envs import ENV_NAMES
 from .episode_cache import EpisodeCache
 from .flights import configurations, fly_model
 from .paper_results import PaperAgent
-from .plots import MapPanel, Path2D, paths_figure, threshold_figure, training_curves
+from .plots import MapPanel, Path2D, paths_figure, seed_figure, threshold_figure, training_curves
 
 FINE_THRESHOLDS = tuple(np.round(np.arange(0.05, 0.501, 0.025), 3))
 DRONE_PANELS = 6
@@ -153,6 +153,7 @@ def markdown(
     tests: dict[str, dict[str, comparison.PairedTest]],
     summaries: dict[str, metrics.Summary],
     command: str,
+    seed_reads: dict[str, comparison.SeedRead] | None = None,
 ) -> str:
     """results.md: the paper's tables for these agents (by label: their models, each seed's
     ``runs``, the ``intervals`` and ``summaries`` of those, and the ``tests`` against the first),
@@ -303,7 +304,61 @@ def markdown(
             f"| {label} | " + " | ".join(_p(t[k]) for k in named) + " |"
             for label, t in tests.items()
         ]
+    if seed_reads and any(len(r.seeds) > 1 for r in seed_reads.values()):
+        lines += ["", *_seed_section(seed_reads)]
     return "\n".join(lines) + "\n"
+
+
+_SEED_SCORE_NAMES = {
+    "success": "Success",
+    "collision": "Collisions",
+    "success_minus_collision": "Success − collisions",
+}
+
+
+def _seed_section(reads: dict[str, comparison.SeedRead]) -> list[str]:
+    """results.md's read over training seeds: each agent's mean and interquartile mean of the
+    per-seed scores, the probability of improvement over the baseline, and every seed's row."""
+    base = next(iter(reads))
+    names = list(_SEED_SCORE_NAMES.values())
+    lines = [
+        "## Over training seeds",
+        "",
+        (
+            "Each seed's model scored on every configuration (percent); per agent the mean and "
+            "the interquartile mean (IQM) of those per-seed scores, with 95 % percentile-bootstrap"
+            f" intervals over the seeds ({comparison.RESAMPLES} resamples). P(improvement): how "
+            f"likely a seed of the agent beats a seed of {base} (fewer collisions counts as better;"
+            " 0.5: neither), with its bootstrap interval."
+        ),
+        "",
+        "| Agent | Seeds | " + " | ".join(f"{n}: mean | {n}: IQM" for n in names) + " |",
+        "|---|---:|" + "---:|" * (2 * len(names)),
+    ]
+    for label, r in reads.items():
+        cells = [f"{_ci(r.mean[k], '.1f')} | {_ci(r.iqm[k], '.1f')}" for k in _SEED_SCORE_NAMES]
+        lines.append(f"| {label} | {len(r.seeds)} | " + " | ".join(cells) + " |")
+    if len(reads) > 1:
+        lines += [
+            "",
+            f"P(improvement) over {base}:",
+            "",
+            "| Agent | " + " | ".join(names) + " |",
+            "|---|" + "---:|" * len(names),
+        ]
+        lines += [
+            f"| {label} | "
+            + " | ".join(_ci(r.improvement[k], ".2f") for k in _SEED_SCORE_NAMES)
+            + " |"
+            for label, r in reads.items()
+            if r.improvement is not None
+        ]
+    lines += ["", "| Agent | Seed | " + " | ".join(names) + " |", "|---|---:|" + "---:|" * 3]
+    for label, r in reads.items():
+        for i, seed in enumerate(r.seeds):
+            row = " | ".join(f"{r.scores[k][i]:.0f}" for k in _SEED_SCORE_NAMES)
+            lines.append(f"| {label} | {_fmt(seed, 'd')} | {row} |")
+    return lines
 
 
 def panels(
@@ -433,13 +488,16 @@ def main(argv: list[str] | None = None) -> int:
     base_label, base_runs = next(iter(runs.items()))
     for label, seeds in list(runs.items())[1:]:
         tests[label] = comparison.versus_baseline(base_runs, seeds, line)
+    seed_reads = comparison.over_seeds(
+        runs, {label: [m.seed for m in models] for label, models in groups.items()}
+    )
     out: Path = args.out
     out.mkdir(parents=True, exist_ok=True)
     command = "python -m cstep_bridge.evaluate " + shlex.join(
         argv if argv is not None else sys.argv[1:]
     )
     (out / "results.md").write_text(
-        markdown(env, groups, runs, intervals, tests, summaries, command)
+        markdown(env, groups, runs, intervals, tests, summaries, command, seed_reads)
     )
     episodes = {
         label: [
@@ -470,6 +528,7 @@ def main(argv: list[str] | None = None) -> int:
                     k: {name: asdict(iv) for name, iv in v.items()} for k, v in intervals.items()
                 },
                 "tests": {k: {name: asdict(t) for name, t in v.items()} for k, v in tests.items()},
+                "over_seeds": {k: asdict(v) for k, v in seed_reads.items()},
                 "episodes": episodes,
             },
             indent=1,
@@ -501,9 +560,16 @@ def main(argv: list[str] | None = None) -> int:
         out / "training_curves.png",
         title=f"{env}: training across seeds (line: mean, band: range)",
     )
+    seed_figure(
+        {label: r.scores for label, r in seed_reads.items()},
+        {label: r.mean for label, r in seed_reads.items()},
+        {k: f"{name} (%)" for k, name in _SEED_SCORE_NAMES.items()},
+        out / "seeds.png",
+        title=f"{env}: each training seed (dots), mean and 95 % interval over seeds (bars)",
+    )
     print(
         f"wrote {out / 'results.md'}, results.json, paths.png, time_near_obstacle.png, "
-        "training_curves.png"
+        "training_curves.png, seeds.png"
     )
     return 0
 

@@ -190,3 +190,38 @@ def threshold_figure(
     fig.tight_layout()
     fig.savefig(png, dpi=120)
     plt.close(fig)
+
+
+def seed_figure(
+    scores: Mapping[str, Mapping[str, Sequence[float]]],
+    means: Mapping[str, Mapping[str, Interval]],
+    panels: Mapping[str, str],
+    png: Path,
+    title: str = "",
+) -> None:
+    """Per agent, every training seed's score as a dot and the mean over seeds with its interval
+    as a bar; one panel per score (``panels``: score name → axis label). ``scores`` and ``means``
+    are by agent, then by score name."""
+    fig, axes = plt.subplots(1, len(panels), figsize=(3.2 * len(panels), 3.6), squeeze=False)
+    rng = np.random.default_rng(0)  # the dots' sideways jitter, the same in every drawing
+    for ax, (name, axis_label) in zip(axes[0], panels.items(), strict=True):
+        for i, label in enumerate(scores):
+            values = np.asarray(scores[label][name])
+            ax.scatter(i + rng.uniform(-0.12, 0.12, len(values)), values, s=14, color=f"C{i}")
+            iv = means[label][name]
+            ax.errorbar(
+                i + 0.3,
+                iv.mean,
+                yerr=[[iv.mean - iv.low], [iv.high - iv.mean]],
+                fmt="o",
+                color="black",
+                capsize=3,
+                ms=4,
+            )
+        ax.set_xticks(range(len(scores)), list(scores), rotation=30, ha="right")
+        ax.set_ylabel(axis_label)
+        ax.grid(alpha=0.3, axis="y")
+    fig.suptitle(title)
+    fig.tight_layout()
+    fig.savefig(png, dpi=120)
+    plt.close(fig)

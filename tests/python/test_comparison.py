@@ -3,6 +3,7 @@
 import numpy as np
 import pytest
 from cstep_bridge import comparison, metrics
+from scipy import stats
 
 
 def test_mcnemar_is_the_exact_binomial_test_of_the_discordant_pairs():
@@ -129,3 +130,64 @@ def test_episodes_become_seed_by_configuration_matrices_and_tests_per_metric():
     assert "clear_time" not in ci and ci["success"].mean == 1.0
     with pytest.raises(ValueError, match="same configurations"):
         comparison.metric_matrix([base[0], runs[0][:1]], lambda e: 0.0)
+
+
+def test_seed_intervals_cover_the_population_mean_and_the_iqm_resists_a_collapsed_seed():
+    rng = np.random.default_rng(3)
+    covered = 0
+    for _ in range(60):
+        scores = rng.normal(70.0, 10.0, 10)
+        iv = comparison.seed_interval(scores, "mean", resamples=2000)
+        assert iv.low <= iv.mean <= iv.high and iv.mean == pytest.approx(scores.mean())
+        covered += iv.low <= 70.0 <= iv.high
+    assert covered >= 48  # nominal 95 %; percentile intervals on 10 seeds run a little short
+    healthy = [72.0, 75.0, 78.0, 70.0, 74.0, 76.0, 73.0, 77.0, 71.0]
+    collapsed = [*healthy, 3.0]  # a seed that came apart (d260's 8 % / 5 %)
+    assert comparison.seed_interval(collapsed, "mean").mean < 68
+    iqm = comparison.seed_interval(collapsed, "iqm")
+    assert iqm.mean == pytest.approx(np.mean(sorted(collapsed)[2:8]))  # trims 2.5 of 10 each end
+    assert 72 < iqm.mean < 76
+    assert comparison.seed_interval([5.0]) == comparison.Interval(5.0, 5.0, 5.0)
+    with pytest.raises(ValueError, match="finite per-seed"):
+        comparison.seed_interval([1.0, np.nan])
+    with pytest.raises(ValueError, match="statistic must be one of"):
+        comparison.seed_interval([1.0, 2.0], "median")
+
+
+def test_the_probability_of_improvement_counts_seed_pairs_as_mann_whitney_does():
+    base = [60.0, 70.0, 80.0, 70.0]
+    better = [75.0, 85.0, 90.0, 70.0, 95.0]
+    poi = comparison.probability_of_improvement(base, better)
+    u = stats.mannwhitneyu(better, base).statistic  # pairs won by `better`, ties half
+    assert poi.mean == pytest.approx(u / (len(base) * len(better)))
+    assert 0.5 < poi.low <= poi.mean <= poi.high <= 1.0
+    same = comparison.probability_of_improvement(base, base)
+    assert same.mean == 0.5 and same.low < 0.5 < same.high
+    apart = comparison.probability_of_improvement([1.0, 2.0], [10.0, 11.0])
+    assert apart == comparison.Interval(1.0, 1.0, 1.0)
+
+
+def test_over_seeds_reads_each_agent_per_seed_and_counts_fewer_collisions_as_better():
+    def seed_run(successes: int, collisions: int) -> list[metrics.Episode]:
+        outcomes = [True] * successes + [False] * (10 - successes)
+        runs = [episode(i, ok, [0.5]) for i, ok in enumerate(outcomes)]
+        for e in runs[successes : successes + collisions]:
+            e.collision = True
+        for e in runs[successes + collisions :]:
+            e.collision = False
+        return runs
+
+    runs = {
+        "base": [seed_run(7, 3), seed_run(8, 2)],
+        "careful": [seed_run(7, 0), seed_run(8, 1), seed_run(6, 0)],
+    }
+    reads = comparison.over_seeds(runs, {"base": [11, 12], "careful": [11, 12, 13]})
+    assert reads["base"].scores == {
+        "success": [70.0, 80.0],
+        "collision": [30.0, 20.0],
+        "success_minus_collision": [40.0, 60.0],
+    }
+    assert reads["base"].improvement is None and reads["careful"].seeds == [11, 12, 13]
+    assert reads["careful"].mean["collision"].mean == pytest.approx(100 / 30)
+    assert reads["careful"].improvement["collision"].mean == 1.0  # every pair has fewer
+    assert reads["careful"].improvement["success"].mean == pytest.approx(2 / 6)  # 1 won, 2 tied

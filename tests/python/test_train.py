@@ -190,6 +190,8 @@ def test_evaluation_cli_groups_seeds_and_tests_agents_against_the_baseline(drone
     run("evaluate", *models, *labels, *args)
     md = (out / "results.md").read_text()
     assert "## Paired tests against two seeds (two-sided p-values)" in md
+    assert "## Over training seeds" in md and "| two seeds | 4 |" in md  # seed 4's row
+    assert (out / "seeds.png").stat().st_size > 0
     assert md.count("| two seeds | `") == 2  # one row per seed's model
     doc = json.loads((out / "results.json").read_text())
     assert doc["baseline"] == "two seeds"
@@ -197,6 +199,9 @@ def test_evaluation_cli_groups_seeds_and_tests_agents_against_the_baseline(drone
     assert doc["summaries"]["two seeds"]["episodes"] == 4
     for ci in doc["intervals"].values():
         assert ci["success"]["low"] <= ci["success"]["mean"] <= ci["success"]["high"]
+    seeds = doc["over_seeds"]["two seeds"]
+    assert seeds["seeds"] == [3, 4] and len(seeds["scores"]["success"]) == 2
+    assert doc["over_seeds"]["early"]["improvement"]["success"]["mean"] is not None
     tests = doc["tests"]["early"]
     assert tests["success"]["pairs"] == 2  # 2 seeds vs 1: per-configuration majorities
     assert all(0 <= t["pvalue"] <= 1 for t in tests.values())

@@ -1,0 +1,175 @@
+"""The verdict on the paper's drone claims, read from an evaluation as ``protocol.md`` declares
+("The comparison", five readings), so the paragraph at the top of the results page is computed,
+not written by hand:
+
+    PYTHONPATH=py_bridge .venv/bin/python docs/results/drone/verdict.py docs/results/drone/verdict/results.json
+
+The evaluation is ``python -m cstep_bridge.evaluate`` over every agent's seeds, the unempowered
+agent first (the baseline). Per claim and empowered agent it prints holds / in part / not shown /
+contradicted with the figures it rests on; p-values are Holm-adjusted over the empowered agents
+within each claim (written here: a few lines, where statsmodels would be a new dependency).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+from collections import defaultdict
+from pathlib import Path
+
+import numpy as np
+from cstep_bridge import comparison
+
+ALPHA = 0.05
+LEARNT = 50.0  # percent success: an agent that learnt the task
+MARGINAL = 1.2  # clear time at most 20 % above the baseline's: the paper calls +18.4 % marginal
+PAPER = {  # the paper's Tables 1 and 2: success, clear time (s), decrease within 0.1 m
+    "unempowered": (82, 6.56, None),
+    "c10": (89, 6.91, 31.05),
+    "c1": (92, 7.77, 72.61),
+    "c0.5": (99, 7.63, 85.76),
+}
+
+
+def holm(pvalues: dict[str, float]) -> dict[str, float]:
+    """Holm's step-down adjustment of a family of p-values (by name)."""
+    order = sorted(pvalues, key=pvalues.get)
+    adjusted, running = {}, 0.0
+    for rank, name in enumerate(order):
+        running = max(running, min(1.0, (len(order) - rank) * pvalues[name]))
+        adjusted[name] = running
+    return adjusted
+
+
+def outcome_matrix(episodes: list[dict], field: str) -> np.ndarray:
+    """An agent's ``field`` (success or collision) as seeds × configurations, seeds in the
+    order the evaluation flew its models."""
+    by_model: dict[str, dict[int, bool]] = defaultdict(dict)
+    for e in episodes:
+        by_model[e["model"]][e["config"]] = bool(e[field])
+    return np.array([[row[c] for c in sorted(row)] for row in by_model.values()])
+
+
+def paper_key(label: str) -> str:
+    """The paper's row for an agent label such as ``c0.5`` or ``c0.5-goal``."""
+    return next((k for k in PAPER if label == k or label.startswith(k + "-")), label)
+
+
+def reading(more: bool, p: float, wanted_more: bool) -> str:
+    """holds / contradicted / not shown for a directional claim tested at p (adjusted)."""
+    if p >= ALPHA:
+        return "not shown"
+    return "holds" if more == wanted_more else "contradicted"
+
+
+def verdict(doc: dict) -> list[str]:
+    """The verdict table's lines (markdown) for the evaluation ``doc`` (its results.json)."""
+    base = doc["baseline"]
+    agents = [label for label in doc["episodes"] if label != base]
+    seeds = {
+        label: {
+            f: 100 * outcome_matrix(doc["episodes"][label], f).mean(axis=1)
+            for f in ("success", "collision")
+        }
+        for label in doc["episodes"]
+    }
+    rate = {label: doc["summaries"][label] for label in doc["episodes"]}
+    collision_tests = {
+        label: comparison.mcnemar(
+            outcome_matrix(doc["episodes"][base], "collision"),
+            outcome_matrix(doc["episodes"][label], "collision"),
+        )
+        for label in agents
+    }
+    p_success = holm({a: doc["tests"][a]["success"]["pvalue"] for a in agents})
+    p_collision = holm({a: collision_tests[a].pvalue for a in agents})
+    p_near = holm({a: doc["tests"][a]["within_0.1"]["pvalue"] for a in agents})
+    p_clear = holm({a: doc["tests"][a]["clear_time"]["pvalue"] for a in agents})
+    iv = doc["intervals"]
+    lines = [
+        f"| Claim | {' | '.join(agents)} |",
+        "|---|" + "---|" * len(agents),
+    ]
+
+    def row(claim: str, cells: list[str]) -> None:
+        lines.append(f"| {claim} | " + " | ".join(cells) + " |")
+
+    cells = []
+    for a in agents:
+        s = seeds[a]["success"]
+        ci = comparison.seed_interval(s)
+        if ci.low > LEARNT:
+            word = "holds"
+        elif np.mean(s >= LEARNT) >= 0.5:
+            word = "in part"
+        else:
+            word = "does not hold"
+        cells.append(
+            f"{word}: {ci.mean:.1f} % [{ci.low:.1f}, {ci.high:.1f}], "
+            f"{int(np.sum(s >= LEARNT))}/{len(s)} seeds ≥ {LEARNT:.0f} %"
+        )
+    row("1. the empowered agent learns", cells)
+
+    cells = []
+    for a in agents:
+        ours, theirs = rate[a]["success_rate"], rate[base]["success_rate"]
+        word = reading(ours > theirs, p_success[a], wanted_more=True)
+        paper = PAPER.get(paper_key(a), (None,))[0]
+        cells.append(
+            f"{word}: {100 * ours:.1f} % vs {100 * theirs:.1f} % (p = {p_success[a]:.2g}; "
+            f"paper {paper} vs 82 %)"
+        )
+    row("2. succeeds more often", cells)
+
+    cells = []
+    for a in agents:
+        ours, theirs = rate[a]["collision_rate"], rate[base]["collision_rate"]
+        word = reading(ours < theirs, p_collision[a], wanted_more=True)
+        cells.append(
+            f"{word}: {100 * ours:.1f} % vs {100 * theirs:.1f} % (p = {p_collision[a]:.2g})"
+        )
+    row("3. collides less", cells)
+
+    cells = []
+    for a in agents:
+        ours, theirs = iv[a]["within_0.1"]["mean"], iv[base]["within_0.1"]["mean"]
+        cut = 100 * (1 - ours / theirs) if theirs else float("nan")
+        word = reading(ours < theirs, p_near[a], wanted_more=True)
+        change = f"{cut:.0f} % less" if cut >= 0 else f"{-cut:.0f} % more"
+        paper = PAPER.get(paper_key(a), (None, None, None))[2]
+        cells.append(
+            f"{word}: {ours:.2f} vs {theirs:.2f} s, {change} (p = {p_near[a]:.2g}; "
+            f"paper {paper} % less)"
+        )
+    row("4. less time within 0.1 m", cells)
+
+    cells = []
+    for a in agents:
+        ours, theirs = iv[a]["clear_time"]["mean"], iv[base]["clear_time"]["mean"]
+        if ours is None or theirs is None:
+            cells.append("not shown: an agent never cleared the block")
+            continue
+        ratio = ours / theirs
+        slower = ours > theirs and p_clear[a] < ALPHA
+        word = "holds" if ratio <= MARGINAL else ("does not hold" if slower else "not shown")
+        paper = PAPER.get(paper_key(a), (None, None))[1]
+        cells.append(
+            f"{word}: {ours:.2f} vs {theirs:.2f} s, ×{ratio:.2f} (p = {p_clear[a]:.2g}; "
+            f"paper ×{paper / PAPER['unempowered'][1]:.2f})"
+            if paper
+            else f"{word}: {ours:.2f} vs {theirs:.2f} s, ×{ratio:.2f} (p = {p_clear[a]:.2g})"
+        )
+    row("5. clears the block marginally slower", cells)
+    return lines
+
+
+def main() -> None:
+    """Prints the verdict table of the evaluation named on the command line."""
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("results", type=Path, help="an evaluation's results.json")
+    doc = json.loads(ap.parse_args().results.read_text())
+    print("\n".join(verdict(doc)))
+
+
+if __name__ == "__main__":
+    main()

@@ -14,27 +14,14 @@ Action: a force in [−1, 1]² × m·A with A = 5 m/s² per axis, held for the c
 300 control steps (10 s); contact with a wall terminates; ``success`` flags coming within 0.3 m
 of the goal (the episode goes on).
 
-Horizon T = 0.8 s, by the paper's heuristic (worst-case stopping time from the speeds reached):
-a pilot that heads for the goal through either route, braking at half authority so that it
-never touches a wall, reaches 3.9–4.2 m/s (median peak 3.9 m/s over the 18 configurations on
-each route; 4.8 m/s braking at 0.8 A), and stops from 4 m/s in 4/5 = 0.8 s. From rest it reaches
-A·T²/2 = 1.6 m each way, inside the 3 m LiDAR range. ``cstep eval`` (150 bang-bang trajectories,
-free_fraction estimator) in the middle of the narrow corridor (−2.5, 0) vs the wide route
-(1.5, 0), moving along the route:
-
-=========  ===================  ===================  ===================
-T          at rest              2 m/s                4 m/s
-=========  ===================  ===================  ===================
-0.5 s      0.03 vs 0.45 nats    0.01 vs 0.45         0.13 vs 0.45
-0.8 s      0.66 vs 2.14         0.54 vs 2.04         −0.30 vs 1.24
-1.0 s      0.71 vs 2.63         0.50 vs 2.26         −0.29 vs 1.49
-=========  ===================  ===================  ===================
-
-(free areas at rest, T = 0.8 s: 1.9 vs 8.5 m²). At 0.5 s the ±0.625 m reach barely exceeds the
-corridor's ±0.4 m of free play and the routes differ by 0.4 nats; at 0.3 s they do not differ at
-all. At 0.8 s the corridor is 1.5 nats (4.4× in area) less empowered at every speed; 1.0 s adds
-little, and its forward reach vT + A·T²/2 passes the 3 m LiDAR (unseen = occupied) from 0.5 m/s
-on, where 0.8 s stays inside it up to 1.75 m/s.
+Horizon T = 0.8 s, by the paper's heuristic (the worst-case stopping time from the speeds
+reached): a pilot heading for the goal by either route, braking at half authority, peaks near
+4 m/s, and stops from 4 m/s at A in 0.8 s; from rest it reaches A·T²/2 = 1.6 m each way, inside
+the 3 m LiDAR range. At 0.8 s the one-cell corridor scores about 1.5 nats below the wide route at
+every speed; at 0.5 s they differ by only 0.4 nats, and 1.0 s adds little while its forward
+reach passes the LiDAR's range (unseen space counts as occupied) from 0.5 m/s on. The
+measurements are in the lab notebook, ``docs/results/protocol.md`` ("Moved from the code's
+comments").
 
 Observation (184 values, float32): goal − position (2, m), velocity (2, m/s), the 180 LiDAR
 ranges clipped to [0, 3] m (no return = 3 m), from the ball's centre. ``info``: as the drone env's

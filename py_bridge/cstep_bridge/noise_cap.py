@@ -1,14 +1,11 @@
 """A falling cap on gSDE's exploration noise: wide, correlated exploration early, precise flight late.
 
-Why: the drone sweep (``docs/results/protocol.md``) found that PPO learns the goal only with
-temporally correlated gSDE noise, and that this noise stays large: gSDE's noise for a state is
-``θ · z(s)``, with ``θ ~ N(0, σ²)`` per latent feature and ``z(s)`` the policy's latent features,
-whose size PPO does not control. Flying run d17's best model on the 100 evaluation arenas
-(``docs/results/drone/failure_modes.py --model docs/results/drone/models/unempowered-d17``), its
-noise std before the tanh squashing is a median 3.5, its mean a median 3.6 in size; under that
-noise the policy learns bang-bang actions (80 % of components saturated) and keeps away from
-walls, so goals near a wall are not reached by its deterministic actions. Neither SB3 nor rl-zoo has a schedule for the noise (PPO's
-``ent_coef`` is an incentive, not a bound; it did not stop the saturation, run d14), hence this.
+Why: PPO learns the drone's goal only with temporally correlated gSDE noise, and that noise can
+stay large: gSDE's noise for a state is ``θ · z(s)``, with ``θ ~ N(0, σ²)`` per latent feature and
+``z(s)`` the policy's latent features, whose size PPO does not control. Noise as large as the
+policy's mean drives it to bang-bang actions that keep away from walls, so goals near a wall are
+not reached. PPO's ``ent_coef`` is an incentive, not a bound, and neither SB3 nor rl-zoo has a
+schedule for the noise, hence this. What it did in the sweep: ``docs/results/protocol.md``.
 
 What it does: before each rollout, the noise std of each action component — the median over the
 last rollout's observations of ``sqrt(Σ_j z_j(s)² σ_jk²)`` — is measured, and where it exceeds the

@@ -1,4 +1,4 @@
-//! A fuzz loop over the CDR decoding of everything `cstep node` reads from DDS (issue 12):
+//! A fuzz loop over the CDR decoding of everything `cstep node` reads from DDS:
 //! random and mutated bytes go through the decode path the node's DDS readers use, and whatever
 //! decodes goes on through the node's input checks (`src/ros/convert.rs`). Nothing may panic.
 //!

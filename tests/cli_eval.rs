@@ -221,7 +221,7 @@ fn malformed_inputs_fail_with_one_line_naming_file_and_field() {
         "not a valid message",
     );
 
-    // Finite in f64 but physically meaningless: rejected, naming field and value (issue 12).
+    // Finite in f64 but physically meaningless: rejected, naming field and value.
     let mut fast = odometry();
     fast.twist.twist.linear.x = 1e39;
     let fast = write(&dir, "fast.json", &serde_json::to_string(&fast).unwrap());
@@ -243,8 +243,8 @@ fn malformed_inputs_fail_with_one_line_naming_file_and_field() {
         "pose.pose.orientation: is not a rotation",
     );
 
-    // Issue 12, failure 9: `[]` (and any non-object) read as the default message, a robot at
-    // rest at the origin.
+    // A regression: `[]` (and any non-object) was once read as the default message, a robot
+    // at rest at the origin.
     for (name, text, kind) in [
         ("array.json", "[]", "an array"),
         ("number.json", " 3\n", "a number"),
@@ -256,7 +256,7 @@ fn malformed_inputs_fail_with_one_line_naming_file_and_field() {
         assert_clear_error(&eval(&good_odom, &file, &[]), name, &words);
     }
 
-    // Issue 12, failure 9: narrowed to float32 first, this was reported as "got inf".
+    // A regression: narrowed to float32 first, this was once reported as "got inf".
     let mut wide = serde_json::to_value(corridor_scan()).unwrap();
     wide["angle_increment"] = serde_json::json!(1e300);
     let wide = write(&dir, "wide.json", &wide.to_string());
@@ -279,7 +279,7 @@ fn malformed_inputs_fail_with_one_line_naming_file_and_field() {
         "'horizon' must be a positive number",
     );
     // Validates, but its control sample would take 7.5 GiB: refused before any evaluation
-    // (issue 12, failure 6: the allocator aborted the process, exit 134).
+    // (it once got through, and the allocator aborted the process, exit 134).
     assert_clear_error(
         &eval(
             &good_odom,
@@ -319,7 +319,7 @@ fn malformed_inputs_fail_with_one_line_naming_file_and_field() {
 
 #[test]
 fn endless_special_and_oversized_input_files_are_refused_naming_them() {
-    // Issue 12, failure 7: /dev/zero as any input was read until memory ran out, a FIFO blocked
+    // A regression: /dev/zero as any input was once read until memory ran out, a FIFO blocked
     // forever. Each is refused in one line naming the path and what it is.
     let dir = workdir("special");
     let (odom, scan) = write_valid_inputs(&dir);

@@ -27,7 +27,7 @@ fn assert_refused(output: &Output, words: &str) {
 
 #[test]
 fn a_configuration_beyond_the_memory_budget_is_refused_at_start() {
-    // Issue 12, failure 6: this validated, and the node died on its first request.
+    // A regression: this once validated, and the node died on its first request.
     assert_refused(
         &node(&["-p", "trajectories:=100000", "-p", "steps:=10000"]),
         "command line: 'trajectories' × 'steps' (100000 × 10000, 2 command axes) needs 7629 MiB \
@@ -37,7 +37,7 @@ fn a_configuration_beyond_the_memory_budget_is_refused_at_start() {
 
 #[test]
 fn a_parameters_file_that_never_ends_is_refused_at_start() {
-    // Issue 12, failure 7: read until memory ran out (/dev/zero) or blocked forever (a FIFO).
+    // A regression: once read until memory ran out (/dev/zero) or blocked forever (a FIFO).
     assert_refused(
         &node(&["--params-file", "/dev/zero"]),
         "/dev/zero: cannot read the file: it is a character device, not a regular file",

@@ -1,6 +1,6 @@
 //! `cstep node` over real DDS (localhost, a private domain): a service request that is not
 //! decodable CDR is dropped, counted in the diagnostics' `inputs_rejected` and named there, as
-//! an undecodable topic message is (issue 12, failure 9: the servers dropped it uncounted).
+//! an undecodable topic message is (the servers once dropped it uncounted).
 
 #[path = "common/live.rs"]
 mod live;

@@ -24,7 +24,7 @@ stale by wall-clock age; so a replay gets the same scores when the inputs arrive
 order with the same gaps as live, and each scan is scored before the next odometry arrives: at
 the recorded pace, with gaps wider than the delivery jitter and the scoring time. The node must
 run with the same parameters (``seed``, the sampler, the model, ``safety_coefficient``: each
-score carries its ``c``). See the README's "Record and replay".
+score carries its ``c``). See docs/node.md, "Record and replay".
 """
 
 from __future__ import annotations

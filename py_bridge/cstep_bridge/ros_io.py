@@ -106,7 +106,7 @@ PRIVATE_DOMAINS = range(1, 51)
 
 _DOMAIN_COUNTER = itertools.count()
 # Where this process's candidates start: random, as two trainers' process ids agreeing mod 100
-# once gave them one domain (issue 12, failure 5).
+# once gave them one domain, where both their nodes answered every reward request.
 _DOMAIN_OFFSET = random.SystemRandom().randrange(len(PRIVATE_DOMAINS))
 
 

@@ -1,4 +1,4 @@
-//! Another participant answering under this node's names (issue 12, failure 5).
+//! Another participant answering under this node's names, found from what DDS discovery reports.
 //!
 //! Two nodes that publish the same `cstep/empowerment` or serve the same `cstep/evaluate` on one
 //! domain both answer every scan and every request, and a subscriber or a client gets a mix of

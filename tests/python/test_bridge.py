@@ -316,7 +316,7 @@ def test_a_killed_trainer_leaves_no_node_behind(ros_domain):
 
 
 def test_a_node_closed_cleanly_leaves_no_log_and_a_failed_one_keeps_its_error(ros_domain):
-    """Issue 12, failure 9: every bridge node left its ``cstep-node-<domain>-*.log`` behind."""
+    """A regression: every bridge node once left its ``cstep-node-<domain>-*.log`` behind."""
     node = CStepNode(ros_domain)
     log = Path(node.log.name)
     deadline = time.monotonic() + 20

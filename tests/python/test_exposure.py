@@ -1,4 +1,4 @@
-"""What `cstep node` exposes on the network in each ROS_AUTOMATIC_DISCOVERY_RANGE (issue 12).
+"""What `cstep node` exposes on the network in each ROS_AUTOMATIC_DISCOVERY_RANGE.
 
 The node's bound UDP sockets are read from /proc (its file descriptors matched against its
 network namespace's UDP table) for every mode. Modes that would send DDS traffic off this machine

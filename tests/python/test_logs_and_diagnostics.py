@@ -1,4 +1,4 @@
-"""Issue 13, item 4: diagnostics and logs as ROS tools expect them. The diagnostics status is named
+"""Diagnostics and logs as ROS tools expect them. The diagnostics status is named
 `<fully qualified node name>: empowerment` (diagnostic_updater's convention), carries the robot's
 name as `hardware_id` and is stamped with the node's clock — `/clock` under `use_sim_time`. The
 console log is rcutils' format and honours `--log-level`, globally and per logger; the same records

@@ -1,4 +1,4 @@
-"""Issue 13, item 1: the node's outputs and services are relative names, so a node started with
+"""The node's outputs and services are relative names, so a node started with
 `-r __ns:=/drone1` publishes `/drone1/cstep/empowerment` and serves `/drone1/cstep/evaluate`, and
 two robots on one domain never mix. Two real nodes in two namespaces on one domain, each fed its
 own robot over real rclpy; localhost only, a domain per test.

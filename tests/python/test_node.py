@@ -89,7 +89,7 @@ def test_evaluate_service_answers_identically_and_rejects_a_zero_quaternion(rig)
 
 
 def test_evaluate_service_rejects_every_bad_field_by_name_and_never_answers_nan(rig):
-    # Issue 12, failures 2 and 3: a NaN goal was answered reward NaN / valid, an infinite goal
+    # Regressions: a NaN goal was once answered reward NaN / valid, an infinite goal
     # valid, a 1e39 m/s twist valid, a 1e155 quaternion "robot already in collision".
     client = rig.node.create_client(Evaluate, "/cstep/evaluate")
     wait_until(lambda: client.service_is_ready(), "the evaluate service", rig.executor)
@@ -214,7 +214,7 @@ def test_bad_goals_and_meaningless_odometry_on_topics_are_rejected_and_counted(r
 
 
 def test_a_rejected_far_future_stamp_and_a_clock_restart_do_not_stop_scoring(rig):
-    # Issue 12, failure 1: a rejected scan stamped 2^31 - 1 made every later scan "older than
+    # A regression: a rejected scan stamped 2^31 - 1 made every later scan "older than
     # an earlier scan's" until restart; so did a simulation clock restarting at 0.
     far = corridor_scan(2**31 - 1)
     far.angle_increment = 0.0  # malformed: rejected, so it must not count as the newest
@@ -443,7 +443,7 @@ def test_bad_inputs_are_skipped_and_counted_and_the_node_keeps_scoring(rig, cste
 
 
 def test_undecodable_scans_and_odometry_are_counted_and_the_node_keeps_scoring(rig, cstep_node):
-    """Malformed CDR on the input topics (issue 12, failure 8): each message is dropped,
+    """Malformed CDR on the input topics: each message is dropped,
     counted in ``inputs_rejected`` and named in diagnostics (before, they vanished uncounted);
     the node scores the next valid scan."""
     valid = serialize_message(corridor_scan(9000))

@@ -1,4 +1,4 @@
-"""Issue 12, failure 5: two nodes answering under one name on one domain must not mix their
+"""Two nodes answering under one name on one domain must not mix their
 answers silently. A second `cstep node` refuses to start beside one that already serves its
 names; a node that sees another start serving its names later says so loudly (diagnostics ERROR)
 for as long as it does; the bridge takes a private domain nobody is on, and refuses a service

@@ -1,4 +1,4 @@
-"""Issue 13, item 2: the command line launch_ros and `ros2 run --ros-args` produce means to
+"""The command line launch_ros and `ros2 run --ros-args` produce means to
 `cstep node` what it means to an rclpy node. rclpy itself is the reference: for each command line
 the test asks a real rclpy node which parameter overrides it got, then asks a real `cstep node`
 started with the same command line which values it uses (the `horizon`, `num_trajectories` and

@@ -1,6 +1,6 @@
-//! The README's parameter table and `config/cstep.yaml` are written from the one definition of
-//! every parameter, `cstep::parameters::PARAMETERS`: these tests render both and fail when a
-//! file differs. After changing the table, rewrite them with
+//! The parameter table of `docs/parameters.md` and `config/cstep.yaml` are written from the one
+//! definition of every parameter, `cstep::parameters::PARAMETERS`: these tests render both and
+//! fail when a file differs. After changing the table, rewrite them with
 //! `CSTEP_WRITE_DOCS=1 cargo test --test parameter_docs` (or `make parameter-docs`).
 
 use std::path::{Path, PathBuf};
@@ -11,9 +11,12 @@ use cstep::parameters::{Change, Parameter, Value, BUILTIN_URDF_PATH, PARAMETERS}
 /// How to rewrite the files, said in every failure.
 const REWRITE: &str = "CSTEP_WRITE_DOCS=1 cargo test --test parameter_docs";
 
-/// Where the README's table starts and ends.
+/// The page that holds the generated parameter table, between its markers.
+const TABLE_PAGE: &str = "docs/parameters.md";
+
+/// Where the page's table starts and ends.
 const TABLE_START: &str =
-    "<!-- parameters: written from src/parameters.rs by `make parameter-docs` -->\n";
+    "<!-- parameters: written from cstep-core's parameter table by `make parameter-docs` -->\n";
 const TABLE_END: &str = "<!-- parameters: end -->\n";
 
 /// `robot_description` in the shipped file: the URDF beside it, which is the compiled-in one.
@@ -89,8 +92,8 @@ fn yaml_file() -> String {
     out
 }
 
-/// The README's parameter table as the table defines it, between its markers.
-fn readme_table() -> String {
+/// The page's parameter table as the table defines it, between its markers.
+fn parameter_table() -> String {
     // `|` would end the cell and `<properties>` would read as an HTML tag.
     let cell = |s: &str| s.replace('|', "\\|").replace('<', "&lt;");
     let mut out = String::from(TABLE_START);
@@ -127,31 +130,31 @@ fn config_yaml_is_written_from_the_table() {
     let actual = std::fs::read_to_string(&path).unwrap();
     assert!(
         actual == expected,
-        "config/cstep.yaml differs from the table in src/parameters.rs; rewrite it with \
+        "config/cstep.yaml differs from the table in cstep-core's parameters.rs; rewrite it with \
          `{REWRITE}`. Expected:\n{expected}"
     );
 }
 
 #[test]
-fn readme_parameter_table_is_written_from_the_table() {
-    let path = repo("README.md");
-    let readme = std::fs::read_to_string(&path).unwrap();
-    let start = readme
+fn parameter_page_table_is_written_from_the_table() {
+    let path = repo(TABLE_PAGE);
+    let page = std::fs::read_to_string(&path).unwrap();
+    let start = page
         .find(TABLE_START)
-        .expect("the README marks its parameter table");
-    let end = readme[start..]
+        .unwrap_or_else(|| panic!("{TABLE_PAGE} marks its parameter table with {TABLE_START}"));
+    let end = page[start..]
         .find(TABLE_END)
         .expect("the table's end marker")
         + start;
-    let current = &readme[start..end + TABLE_END.len()];
-    let expected = readme_table();
+    let current = &page[start..end + TABLE_END.len()];
+    let expected = parameter_table();
     if writing() {
-        std::fs::write(&path, readme.replace(current, &expected)).unwrap();
+        std::fs::write(&path, page.replace(current, &expected)).unwrap();
     } else {
         assert!(
             current == expected,
-            "README.md's parameter table differs from src/parameters.rs; rewrite it with \
-             `{REWRITE}`. Expected:\n{expected}"
+            "{TABLE_PAGE}'s parameter table differs from the table in cstep-core's \
+             parameters.rs; rewrite it with `{REWRITE}`. Expected:\n{expected}"
         );
     }
 }

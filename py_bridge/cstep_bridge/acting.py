@@ -9,16 +9,15 @@ PPO samples): one action per observation, by one of three rules.
 - ``sample``: the policy as PPO trained it — its action sampled, gSDE's noise matrix drawn afresh
   every ``sde_sample_freq`` steps of the model's own settings (once an episode when that is not
   positive), from a random stream seeded by the episode's number, so a flight is still
-  reproducible and independent of the order episodes are flown in
-  (docs/results/protocol.md, e02).
+  reproducible and independent of the order episodes are flown in.
 
 The two differ when s is large against |μ|: a squashed gSDE policy at the end of training carries
 s ≈ 2 against |μ| ≈ 3.5, so ``tanh(μ)`` saturates where the policy PPO trained acts, on average,
 far more gently; the mode is then a high-gain version of the trained behaviour, which chatters in
-limit cycles behind the waypoint controller's lag (docs/results/protocol.md, e01). Neither SB3 nor
-rl-zoo offers the expected action, so it is computed here: the mean of the action at
-:data:`QUANTILES` equally spaced quantiles of X. Both integrands are monotone in X and span at
-most the action box's width (2 for the drone's and the maze's [−1, 1]), so that mean is within
+limit cycles behind the waypoint controller's lag (the lab notebook, docs/results/protocol.md,
+has the flights). Neither SB3 nor rl-zoo offers the expected action, so it is computed here: the
+mean of the action at :data:`QUANTILES` equally spaced quantiles of X. Both integrands are
+monotone in X and span at most the action box's width (2 for the drone's and the maze's [−1, 1]), so that mean is within
 width / :data:`QUANTILES` of the expectation whatever s is (a Gauss–Hermite rule is not: at
 s ≫ 1, tanh(X) is nearly a step its nodes straddle).
 """

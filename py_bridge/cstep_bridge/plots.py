@@ -219,6 +219,7 @@ def seed_figure(
                 ms=4,
             )
         ax.set_xticks(range(len(scores)), list(scores), rotation=30, ha="right")
+        ax.set_xlim(-0.5, len(scores) - 0.2)
         ax.set_ylabel(axis_label)
         ax.grid(alpha=0.3, axis="y")
     fig.suptitle(title)

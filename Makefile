@@ -36,7 +36,7 @@ lint: lint-rust lint-python
 
 lint-rust:
 	$(CARGO) fmt --all -- --check
-	$(CARGO) clippy --all-targets --quiet -- -D warnings
+	$(CARGO) clippy --workspace --all-targets --quiet -- -D warnings
 
 lint-python: $(PY_STAMP)
 	$(VENV)/bin/ruff check .
@@ -114,7 +114,7 @@ $(MSGS_STAMP): $(PY_STAMP) $(MSG_SOURCES) Makefile
 # is this checkout's cargo target directory, so the crate compiles once (release profile) for
 # colcon and the Python tests' `cargo build --release`.
 COLCON_INPUTS := package.xml Cargo.toml Cargo.lock $(MSG_SOURCES) \
-	$(shell find src vendor config urdf launch -type f)
+	$(shell find src crates/cstep-core vendor config urdf launch -type f)
 colcon: $(COLCON_STAMP)
 
 $(COLCON_STAMP): $(PY_STAMP) $(COLCON_INPUTS) Makefile

@@ -1,181 +1,37 @@
-//! Validated conversion from ROS messages to the core's inputs: the one place that decides
-//! whether a message can be scored, shared by the node's topics, `/cstep/evaluate` and
-//! `cstep eval`.
-//!
-//! A message that cannot describe a state or a scan is rejected with an [`InputError`] naming
-//! the field and the value: NaN or infinite numbers, a quaternion that is not a rotation, ranges
-//! that do not match the angles, and numbers beyond the physically meaningful bounds below
-//! (finite in `f64` but meaningless, or not even finite once the rollouts narrow them to `f32`).
-//! One that is well formed but says nothing useful (an empty scan) passes, and the estimator
-//! answers it with `valid = false`. Fields cstep does not read (covariances, `child_frame_id`,
-//! `intensities`, `time_increment`, `scan_time`, a goal's orientation) are not checked.
-//! Individual `ranges` values are never malformed: REP 117 gives every `f32` a meaning (a hit,
-//! no return, or invalid), and the occupancy reads them so.
+//! Conversion between ROS messages and the core's inputs and outputs. Whether a message can be
+//! scored is decided by the core's [`crate::input`] (shared with the Python scorer); this module
+//! reads the message fields into it, and checks what only a message has (a stamp's
+//! nanoseconds). Fields cstep does not read (covariances, `child_frame_id`, `intensities`,
+//! `time_increment`, `scan_time`, a goal's orientation) are not checked.
 
-use std::f32::consts::TAU;
-
-use nalgebra::{Quaternion, UnitQuaternion, Vector3};
+use nalgebra::Vector3;
 
 use super::messages::{EmpoweredReward, Empowerment, Header, LaserScan, Odometry, Point, Time};
 use crate::estimator::Estimate;
+pub use crate::input::InputError;
+use crate::input::{self, ScanGeometry};
 use crate::occupancy::Scan;
 use crate::reward::Reward;
 use crate::state::RobotState;
-
-/// More beams than any real 2D LiDAR produces; larger scans are rejected, not processed.
-pub const MAX_BEAMS: usize = 100_000;
-
-/// Largest |x|, |y| or |z| of a position or a goal, metres: 10 000 km from the frame's origin
-/// covers any frame a robot uses on Earth (UTM northings and ECEF coordinates included).
-pub const MAX_COORDINATE: f64 = 1e7;
-
-/// Largest speed, the length of `twist.linear`, m/s: three times the speed of sound, beyond any
-/// robot cstep models (a racing drone flies at 50 m/s).
-pub const MAX_SPEED: f64 = 1e3;
-
-/// Largest angular rate, the length of `twist.angular`, rad/s: 16 turns a second, well beyond
-/// the 35–70 rad/s at which MEMS gyroscopes saturate.
-pub const MAX_ANGULAR_RATE: f64 = 100.0;
-
-/// How far from 1 the squared norm of an orientation quaternion may be: tf2 and RViz reject
-/// transforms beyond the same tolerance (`QUATERNION_NORMALIZATION_TOLERANCE`, 10e-3). Within
-/// it the quaternion is normalised; beyond it is not a rotation but a bug upstream.
-pub const QUATERNION_NORM_TOLERANCE: f64 = 0.01;
-
-/// Largest `range_max`, metres: beyond the longest-range LiDARs made.
-pub const MAX_RANGE: f32 = 1e4;
-
-/// Largest |angle_min|, |angle_max| and |angle_increment| of a scan, radians: one turn (as an
-/// `f32`, which rounds 2π up). A scan spans at most one turn plus one increment (drivers differ
-/// on whether a full circle repeats its first bearing).
-pub const MAX_SCAN_ANGLE: f32 = TAU;
-
-/// A message field that cannot be used.
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-#[error("{field}: {message}")]
-pub struct InputError {
-    /// The field at fault, as a dotted path (`pose.pose.orientation`).
-    pub field: String,
-    /// What is wrong with it, with the value.
-    pub message: String,
-}
-
-impl InputError {
-    fn new(field: &str, message: impl Into<String>) -> Self {
-        Self {
-            field: field.to_owned(),
-            message: message.into(),
-        }
-    }
-}
-
-/// A vector as `(x, y, z)`, each number as short as reads back exactly (`1e-160`, not 160
-/// digits).
-fn show(v: [f64; 3]) -> String {
-    format!("({:?}, {:?}, {:?})", v[0], v[1], v[2])
-}
-
-fn finite(field: &str, v: [f64; 3]) -> Result<Vector3<f64>, InputError> {
-    if v.iter().all(|x| x.is_finite()) {
-        Ok(Vector3::from(v))
-    } else {
-        Err(InputError::new(
-            field,
-            format!("must be finite, got {}", show(v)),
-        ))
-    }
-}
-
-/// A position: finite, every coordinate within ±[`MAX_COORDINATE`].
-fn position(field: &str, v: [f64; 3]) -> Result<Vector3<f64>, InputError> {
-    let p = finite(field, v)?;
-    if p.amax() > MAX_COORDINATE {
-        return Err(InputError::new(
-            field,
-            format!(
-                "{} m is beyond the ±{MAX_COORDINATE:e} m a position may have",
-                show(v)
-            ),
-        ));
-    }
-    Ok(p)
-}
-
-/// A rate (`unit` per second): finite, its length at most `limit`.
-fn rate(field: &str, v: [f64; 3], limit: f64, unit: &str) -> Result<Vector3<f64>, InputError> {
-    let r = finite(field, v)?;
-    // Components near f64::MAX overflow the norm to inf, which is above any limit too.
-    if r.norm() > limit {
-        return Err(InputError::new(
-            field,
-            format!(
-                "{} {unit}/s is faster than the {limit:?} {unit}/s accepted",
-                show(v)
-            ),
-        ));
-    }
-    Ok(r)
-}
 
 /// The robot state an odometry message describes, with the body-frame twist rotated into the
 /// odometry frame.
 pub fn odometry_to_state(odom: &Odometry) -> Result<RobotState, InputError> {
     let pose = &odom.pose.pose;
-    let p = pose.position;
-    let position = position("pose.pose.position", [p.x, p.y, p.z])?;
-    let attitude = rotation("pose.pose.orientation", pose.orientation)?;
+    let (p, q) = (pose.position, pose.orientation);
     let t = &odom.twist.twist;
-    let linear = [t.linear.x, t.linear.y, t.linear.z];
-    let linear = rate("twist.twist.linear", linear, MAX_SPEED, "m")?;
-    let angular = [t.angular.x, t.angular.y, t.angular.z];
-    let body_rates = rate("twist.twist.angular", angular, MAX_ANGULAR_RATE, "rad")?;
-    Ok(RobotState {
-        position,
-        velocity: attitude * linear,
-        attitude,
-        body_rates,
-    })
-}
-
-/// The rotation an orientation quaternion describes: finite, its squared norm within
-/// [`QUATERNION_NORM_TOLERANCE`] of 1, then normalised.
-fn rotation(
-    field: &str,
-    q: super::messages::Quaternion,
-) -> Result<UnitQuaternion<f64>, InputError> {
-    let shown = format!("(x {:?}, y {:?}, z {:?}, w {:?})", q.x, q.y, q.z, q.w);
-    let raw = Quaternion::new(q.w, q.x, q.y, q.z);
-    if !raw.coords.iter().all(|c| c.is_finite()) {
-        return Err(InputError::new(
-            field,
-            format!("must be finite, got {shown}"),
-        ));
-    }
-    // Components beyond 1e154 overflow the squared norm to inf; below 1e-154 it underflows to 0.
-    let squared = raw.norm_squared();
-    if squared == 0.0 {
-        return Err(InputError::new(
-            field,
-            format!("is not a rotation: zero quaternion {shown}"),
-        ));
-    }
-    if (squared - 1.0).abs() >= QUATERNION_NORM_TOLERANCE {
-        return Err(InputError::new(
-            field,
-            format!(
-                "is not a rotation: squared norm {squared:?}, not within \
-                 {QUATERNION_NORM_TOLERANCE} of 1 (as tf2 requires), {shown}"
-            ),
-        ));
-    }
-    Ok(UnitQuaternion::from_quaternion(raw))
+    input::robot_state(
+        [p.x, p.y, p.z],
+        [q.x, q.y, q.z, q.w],
+        [t.linear.x, t.linear.y, t.linear.z],
+        [t.angular.x, t.angular.y, t.angular.z],
+    )
 }
 
 /// The goal position of a task reward (a `/cstep/evaluate` request's `goal`, a `goal_pose`
-/// message's position, `cstep eval --goal`): finite, within ±[`MAX_COORDINATE`] like a
-/// position, so the task reward `exp(−‖p − goal‖)` is never NaN.
+/// message's position, `cstep eval --goal`): see [`input::goal_position`].
 pub fn goal_position(goal: &Point) -> Result<Vector3<f64>, InputError> {
-    position("goal", [goal.x, goal.y, goal.z])
+    input::goal_position([goal.x, goal.y, goal.z])
 }
 
 /// A stamp whose nanoseconds lie within the second (`builtin_interfaces/Time`).
@@ -195,107 +51,14 @@ fn stamp(field: &str, t: Time) -> Result<(), InputError> {
 /// The scan a `LaserScan` message describes.
 pub fn laser_scan_to_scan(msg: &LaserScan) -> Result<Scan, InputError> {
     stamp("header.stamp", msg.header.stamp)?;
-    for (field, value) in [
-        ("angle_min", msg.angle_min),
-        ("angle_max", msg.angle_max),
-        ("angle_increment", msg.angle_increment),
-        ("range_min", msg.range_min),
-        ("range_max", msg.range_max),
-    ] {
-        if !value.is_finite() {
-            return Err(InputError::new(
-                field,
-                format!("must be finite, got {value:?}"),
-            ));
-        }
-    }
-    for (field, value) in [
-        ("angle_min", msg.angle_min),
-        ("angle_max", msg.angle_max),
-        ("angle_increment", msg.angle_increment),
-    ] {
-        if value.abs() > MAX_SCAN_ANGLE {
-            return Err(InputError::new(
-                field,
-                format!("{value:?} rad is more than one turn (±{MAX_SCAN_ANGLE:?})"),
-            ));
-        }
-    }
-    if msg.angle_increment == 0.0 {
-        return Err(InputError::new(
-            "angle_increment",
-            "must not be zero (beams would all share one bearing)",
-        ));
-    }
-    if msg.range_min < 0.0 || msg.range_max <= msg.range_min {
-        return Err(InputError::new(
-            "range_max",
-            format!(
-                "must exceed range_min ≥ 0, got range_min {:?} and range_max {:?}",
-                msg.range_min, msg.range_max
-            ),
-        ));
-    }
-    if msg.range_max > MAX_RANGE {
-        return Err(InputError::new(
-            "range_max",
-            format!(
-                "{:?} m is beyond the {MAX_RANGE:e} m any LiDAR reaches",
-                msg.range_max
-            ),
-        ));
-    }
-    if msg.ranges.len() > MAX_BEAMS {
-        return Err(InputError::new(
-            "ranges",
-            format!(
-                "has {} beams, more than the {MAX_BEAMS} accepted",
-                msg.ranges.len()
-            ),
-        ));
-    }
-    let span = msg.angle_max as f64 - msg.angle_min as f64;
-    let increment = msg.angle_increment as f64;
-    if span.abs() > MAX_SCAN_ANGLE as f64 + increment.abs() {
-        return Err(InputError::new(
-            "angle_max",
-            format!(
-                "angle_min {:?} to angle_max {:?} spans more than one turn",
-                msg.angle_min, msg.angle_max
-            ),
-        ));
-    }
-    let expected = (span / increment).round() + 1.0;
-    if !(0.0..=MAX_BEAMS as f64).contains(&expected) {
-        return Err(InputError::new(
-            "angle_increment",
-            format!(
-                "{:?} does not step from angle_min {:?} to angle_max {:?}",
-                msg.angle_increment, msg.angle_min, msg.angle_max
-            ),
-        ));
-    }
-    // One beam of slack: drivers differ on whether a full circle repeats its first bearing.
-    if !msg.ranges.is_empty() && (msg.ranges.len() as f64 - expected).abs() > 1.0 {
-        return Err(InputError::new(
-            "ranges",
-            format!(
-                "has {} values but angle_min {:?}, angle_max {:?}, angle_increment {:?} describe {} beams",
-                msg.ranges.len(),
-                msg.angle_min,
-                msg.angle_max,
-                msg.angle_increment,
-                expected
-            ),
-        ));
-    }
-    Ok(Scan {
-        angle_min: msg.angle_min as f64,
-        angle_increment: increment,
-        range_min: msg.range_min as f64,
-        range_max: msg.range_max as f64,
-        ranges: msg.ranges.clone(),
-    })
+    let geometry = ScanGeometry {
+        angle_min: msg.angle_min,
+        angle_max: msg.angle_max,
+        angle_increment: msg.angle_increment,
+        range_min: msg.range_min,
+        range_max: msg.range_max,
+    };
+    input::scan(&geometry, &msg.ranges)
 }
 
 /// The `LaserScan` message for a scan (the inverse of [`laser_scan_to_scan`]).
@@ -344,7 +107,12 @@ pub fn reward_message(header: Header, reward: &Reward, c: f64, valid: bool) -> E
 
 #[cfg(test)]
 mod tests {
+    use nalgebra::UnitQuaternion;
+
     use super::*;
+    use crate::input::{
+        MAX_ANGULAR_RATE, MAX_BEAMS, MAX_COORDINATE, MAX_RANGE, MAX_SCAN_ANGLE, MAX_SPEED,
+    };
     use crate::ros::messages::Quaternion as QuaternionMsg;
 
     fn scan(beams: usize) -> LaserScan {

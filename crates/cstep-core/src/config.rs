@@ -23,7 +23,7 @@ use crate::volume::{EstimatorKind, VolumeDims};
 pub const DEFAULT_NODE_NAME: &str = "cstep_node";
 
 /// The Crazyflie 2.x URDF, compiled in for the built-in defaults.
-pub const BUILTIN_URDF: &str = include_str!("../urdf/cf2x.urdf");
+pub const BUILTIN_URDF: &str = include_str!("../../../urdf/cf2x.urdf");
 
 /// A parameter file or value that cannot be used, with where it came from.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -530,7 +530,7 @@ mod tests {
 
     #[test]
     fn the_shipped_config_file_loads_and_resolves_the_urdf_next_to_it() {
-        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("config/cstep.yaml");
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../config/cstep.yaml");
         let s = Settings::load(Some(&path), DEFAULT_NODE_NAME, &[]).unwrap();
         let RobotSource::File(urdf) = &s.robot_description else {
             panic!()
@@ -542,7 +542,7 @@ mod tests {
     fn urdf_text_in_robot_description_is_the_robot_not_a_path() {
         // launch files pass robot_description as the URDF text (launch_ros writes it into a
         // parameters file as a YAML string); it must not be taken for a relative path.
-        let urdf_path = Path::new(env!("CARGO_MANIFEST_DIR")).join("urdf/cf2x.urdf");
+        let urdf_path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../urdf/cf2x.urdf");
         let urdf = std::fs::read_to_string(&urdf_path).unwrap();
         let dir = temp_dir("urdf-text");
         let file: BTreeMap<&str, BTreeMap<&str, BTreeMap<&str, &str>>> = BTreeMap::from([(

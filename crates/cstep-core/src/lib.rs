@@ -1,11 +1,14 @@
-//! # cstep — continuous space-time empowerment (C-STEP) for mobile robots
+//! # cstep-core — continuous space-time empowerment (C-STEP) for mobile robots
 //!
 //! C-STEP scores how safe a robot's state is as the log-volume of the set of positions it can
 //! still reach within a horizon `T` without colliding (Daubt & Redder, "C-STEP: Continuous
 //! Space-Time Empowerment for Physics-informed Safe Reinforcement Learning of Mobile Agents").
 //!
-//! The crate's core knows nothing of ROS: a [`state::RobotState`] and a [`occupancy::Scan`] go in,
-//! an [`estimator::Estimate`] and a [`reward::Reward`] come out. The pipeline, one module a step:
+//! This crate is the core that the `cstep` node and the `cstep_scoring` Python extension both
+//! build on. It knows nothing of ROS and depends on no DDS crate: a [`state::RobotState`] and a
+//! [`occupancy::Scan`] go in, an [`estimator::Estimate`] and a [`reward::Reward`] come out.
+//! [`input`] decides whether raw numbers describe a state, a scan and a goal. The pipeline, one
+//! module a step:
 //!
 //! 1. [`model`] — robot dynamics behind the [`model::Dynamics`] trait (a URDF-derived quadrotor,
 //!    the paper prototype's point mass);
@@ -19,13 +22,14 @@
 //!    front end (the node, its services, `cstep eval`) scores through.
 //!
 //! [`parameters`] defines every parameter once (type, default, range, unit, description, live or
-//! read-only); [`config`] reads the node's `ros__parameters` YAML against it; [`ros`] holds the
-//! ROS side;
-//! [`input_file`] reads every file a user names, regular files of bounded size only.
+//! read-only); [`config`] reads the node's `ros__parameters` YAML against it;
+//! [`input_file`] reads every file a user names, regular files of bounded size only; [`arena`],
+//! [`scene`] and [`plot`] are the demo's simulated world and its plot.
 
 pub mod arena;
 pub mod config;
 pub mod estimator;
+pub mod input;
 pub mod input_file;
 pub mod model;
 pub mod occupancy;
@@ -34,7 +38,6 @@ pub mod parameters;
 pub mod plot;
 pub mod reward;
 pub mod rollout;
-pub mod ros;
 pub mod sampling;
 pub mod scene;
 pub mod scoring;

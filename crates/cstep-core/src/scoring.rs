@@ -1,14 +1,16 @@
 //! One C-STEP step: a state, its scan, an optional goal and a safety coefficient `c` in, the
 //! estimate and its empowered reward out.
 //!
-//! The node's scans, its `/cstep/evaluate` and `/cstep/evaluate_batch` services and `cstep eval`
-//! all score through [`score`], and the services answer input they cannot score with
-//! [`unscorable`], so that every front end pays the same reward for the same step — in
-//! particular, malformed input never earns more than a collision.
+//! The node's scans, its `/cstep/evaluate` and `/cstep/evaluate_batch` services, `cstep eval`
+//! and the Python scorer all score through [`score`]; the services and the Python scorer admit
+//! a state with [`admit`] and answer input they cannot score with [`unscorable`], so that every
+//! front end pays the same reward for the same step — in particular, malformed input never
+//! earns more than a collision.
 
 use nalgebra::Vector3;
 
 use crate::estimator::{Estimate, Estimator};
+use crate::input::InputError;
 use crate::occupancy::Scan;
 use crate::reward::{empowered_reward, floor_reward, task_reward, Reward};
 use crate::state::RobotState;
@@ -41,6 +43,20 @@ pub fn score(
     };
     let reward = empowered_reward(estimate.empowerment, c, task_reward(&state.position, goal));
     Score { estimate, reward }
+}
+
+/// A state, its scan and its goal as [`crate::input`] checked them, or why they cannot be
+/// scored: the first bad one's error, prefixed `odometry: ` or `scan: ` (a goal's names itself),
+/// as the services report it in `status`.
+pub fn admit(
+    state: Result<RobotState, InputError>,
+    scan: Result<Scan, InputError>,
+    goal: Result<Option<Vector3<f64>>, InputError>,
+) -> Result<(RobotState, Scan, Option<Vector3<f64>>), String> {
+    let state = state.map_err(|e| format!("odometry: {e}"))?;
+    let scan = scan.map_err(|e| format!("scan: {e}"))?;
+    let goal = goal.map_err(|e| e.to_string())?;
+    Ok((state, scan, goal))
 }
 
 /// The score of input that cannot be scored (a malformed state, scan or goal): the floor

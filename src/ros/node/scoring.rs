@@ -18,7 +18,7 @@ use crate::ros::messages::{
     Point,
 };
 use crate::ros::stamps::Order;
-use crate::scoring::{score, Score};
+use crate::scoring::{admit, score, Score};
 
 /// What the scoring thread publishes to.
 pub(super) struct Outputs {
@@ -160,13 +160,11 @@ impl Shared {
         c: f64,
         with_markers: bool,
     ) -> Result<(Empowerment, EmpoweredReward, Option<MarkerArray>), String> {
-        let state = odometry_to_state(query.odom).map_err(|e| format!("odometry: {e}"))?;
-        let scan = laser_scan_to_scan(query.scan).map_err(|e| format!("scan: {e}"))?;
-        let goal = query
-            .goal
-            .map(goal_position)
-            .transpose()
-            .map_err(|e| e.to_string())?;
+        let (state, scan, goal) = admit(
+            odometry_to_state(query.odom),
+            laser_scan_to_scan(query.scan),
+            query.goal.map(goal_position).transpose(),
+        )?;
         let Score { estimate, reward } = score(
             &self.estimator,
             &state,

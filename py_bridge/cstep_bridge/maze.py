@@ -290,9 +290,11 @@ class CStepMazeEnv(EmpoweredRewardEnv):
         success_radius: float = SUCCESS_RADIUS,
         collision_value: str = "none",
         gamma: float = 0.99,
+        reward_source: str = "node",
     ) -> None:
-        """``bridge``: see :class:`~cstep_bridge.env.EmpoweredRewardEnv`; it must serve a node
-        started with :data:`NODE_PARAMS`, as the env's own bridge does. ``config``: a fixed start
+        """``bridge``, ``reward_mode``, ``reward_source``: see
+        :class:`~cstep_bridge.env.EmpoweredRewardEnv`; a bridge must serve a node started with
+        :data:`NODE_PARAMS`, as the env's own bridge does (and its in-process scorer scores). ``config``: a fixed start
         and goal; None draws one of :func:`configurations` per episode from the reset seed."""
         super().__init__(
             empowered,
@@ -304,6 +306,7 @@ class CStepMazeEnv(EmpoweredRewardEnv):
             node_params=NODE_PARAMS,
             collision_value=collision_value,
             gamma=gamma,
+            reward_source=reward_source,
         )
         self.max_steps = episode_steps
         self.success_radius = success_radius

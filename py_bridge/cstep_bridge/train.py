@@ -9,10 +9,12 @@ units (policy and value each), n_steps 2048, batch 64, γ 0.99, GAE λ 0.95, cli
 agents learn the task (``docs/results/protocol.md``). Single options (``--gamma``, ``--net``, ...)
 and ``--hyperparams KEY=VALUE`` override entries. Every agent of a comparison trains with the same
 protocol: the levers in it (normalisation, curriculum, model selection, ...) apply to all alike.
-An empowered agent's environments share one private ``cstep node`` on a ROS domain of their own
-(localhost only), which scores all of them in one service call per vector step (several beyond
-32 environments: :mod:`~cstep_bridge.batched_reward`); with ``--reward-mode topic`` each
-environment starts a node of its own instead.
+An empowered agent's environments are scored together, one batch per vector step
+(:mod:`~cstep_bridge.batched_reward`), by ``--reward-source``: ``inprocess`` (the default) is the
+node's scoring function in this process (:mod:`~cstep_bridge.scoring`, no ROS); ``node`` is one
+private ``cstep node`` on a ROS domain of its own (localhost only), one service call per vector
+step (several beyond 32 environments). The answers are the same, bit for bit. With ``--reward-mode
+topic`` (node only) each environment starts a node of its own instead.
 
 The run directory ``--out`` holds:
 
@@ -45,7 +47,7 @@ from typing import Any
 import numpy as np
 
 from . import protocol
-from .envs import ENV_NAMES, make_env
+from .envs import ENV_NAMES, REWARD_SOURCES, make_env
 from .normalization import stats_path
 
 # Episode fields the Monitor writes and the summaries read.
@@ -116,6 +118,12 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         help="override protocol entries, e.g. gamma=0.995 'normalize={norm_reward: true}'",
     )
     ap.add_argument("--reward-mode", choices=("service", "topic"), default="service")
+    ap.add_argument(
+        "--reward-source",
+        choices=REWARD_SOURCES,
+        help="where the empowered reward is computed: inprocess (default for a new run) or a "
+        "cstep node over ROS (node; what a run.json without this setting used)",
+    )
     ap.add_argument("--device", default="cpu", help="torch device (an MLP trains best on cpu)")
     ap.add_argument("--torch-threads", type=int, default=1, help="torch CPU threads")
     ap.add_argument("--no-progress", dest="progress", action="store_false", help="no bar")
@@ -129,6 +137,8 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         args.overrides = dict(protocol.parse_override(h) for h in args.hyperparams)
     except ValueError as err:
         problems.append(f"--hyperparams: {err}")
+    if args.reward_source == "inprocess" and args.reward_mode == "topic":
+        problems.append("--reward-mode topic needs --reward-source node")
     if problems:
         ap.error("; ".join(problems))
     return args
@@ -175,6 +185,7 @@ def run_settings(args: argparse.Namespace) -> dict[str, Any]:
         **settings,
         "n_envs": args.n_envs if args.n_envs is not None else int(hyper["n_envs"]),
         "reward_mode": args.reward_mode,
+        "reward_source": args.reward_source or "inprocess",
         "checkpoint_every": args.checkpoint_every,
     }
 
@@ -233,6 +244,7 @@ def env_factory(settings: dict[str, Any]):
     kwargs: dict[str, Any] = {}
     if empowered:
         kwargs["reward_mode"] = settings["reward_mode"]
+        kwargs["reward_source"] = settings["reward_source"]
         kwargs["collision_value"] = settings["collision_value"]
         kwargs["gamma"] = settings["gamma"]
 
@@ -253,8 +265,9 @@ def training_vec_env(
 ):
     """The run's ``n_envs`` environments, in processes of their own (``vec_env="subproc"``) or
     in this one (``"dummy"``), each episode logged to ``monitor_dir`` (None: not written). An
-    empowered agent in service mode gets one node for all its envs and one call per vector step
-    (:mod:`~cstep_bridge.batched_reward`); otherwise each env is SB3's usual Monitor-wrapped one."""
+    empowered agent in service mode gets one node (or in process one scorer) for all its envs
+    and one call per vector step (:mod:`~cstep_bridge.batched_reward`); otherwise each env is
+    SB3's usual Monitor-wrapped one."""
     from stable_baselines3.common.env_util import make_vec_env
     from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv
 
@@ -446,8 +459,9 @@ def build_model(settings: dict[str, Any], venv, device: str = "cpu", tensorboard
 
 def load_settings(out: Path) -> dict[str, Any]:
     """The settings of the run in ``out``; a run.json from before protocols existed reads as
-    the paper's protocol with its own entries."""
-    stored = json.loads((out / "run.json").read_text())
+    the paper's protocol with its own entries, and one from before reward sources as
+    ``reward_source: node`` (how it ran)."""
+    stored = {"reward_source": "node", **json.loads((out / "run.json").read_text())}
     if "protocol" in stored:
         return stored
     base = protocol.settings(protocol.load("paper", stored["env"]))
@@ -470,6 +484,8 @@ def train(args: argparse.Namespace) -> Path:
         if not settings_path.exists():
             raise SystemExit(f"--resume: {out} holds no run (no run.json); start one without it")
         settings = load_settings(out)
+        if args.reward_source is not None:  # how it runs, not what it learns: same rewards
+            settings["reward_source"] = args.reward_source
         resume_from = latest_checkpoint(out)
         if resume_from is None:
             raise SystemExit(f"--resume: {out} has no checkpoint or model.zip to continue from")

@@ -111,6 +111,8 @@ def test_empowered_training_with_two_envs_sharing_one_node(tmp_path):
         "2",
         "--timesteps",
         "128",
+        "--reward-source",
+        "node",
         "--out",
         str(out),
         *TINY,
@@ -121,7 +123,8 @@ def test_empowered_training_with_two_envs_sharing_one_node(tmp_path):
     empowerment = float(rollouts[0].split("empowerment")[1].split()[0])
     assert np.isfinite(empowerment)
     assert PPO.load(out / "model.zip", device="cpu").num_timesteps == 128
-    assert json.loads((out / "run.json").read_text())["c"] == 0.5
+    stored = json.loads((out / "run.json").read_text())
+    assert (stored["c"], stored["reward_source"]) == (0.5, "node")
     # One batched vector env, so one episode log (VecMonitor's) instead of one per env.
     assert [p.name for p in (out / "monitor").iterdir()] == ["batched.monitor.csv"]
 

@@ -5,12 +5,15 @@ Every test runs in its own ROS domain (``ROS_DOMAIN_ID``) with
 process a test starts, so tests never see each other's traffic and nothing leaves the machine.
 """
 
+import contextlib
+import fcntl
 import itertools
 import os
 import queue
 import signal
 import subprocess
 import sys
+import tempfile
 import threading
 import time
 from collections.abc import Callable, Iterator
@@ -36,18 +39,41 @@ if signal.getsignal(signal.SIGINT) == signal.SIG_IGN:
     signal.signal(signal.SIGINT, signal.default_int_handler)
 
 # Tests take the domains from the end of the bridge's private ones to 100 (Fast DDS ports stay clear
-# of the ephemeral range up to 101): a training run's private domain is never a test's. Start at an
-# offset from this process id so that two test runs on one machine (two worktrees, say) are
-# unlikely to share a domain; CSTEP_TEST_DOMAIN_BASE pins the start.
+# of the ephemeral range up to 101): a training run's private domain is never a test's. A test
+# holds its domain's lock file (an flock on cstep-test-domain-N.lock in the temporary directory)
+# while it runs, and skips a domain another test process holds, so that two test runs on one
+# machine (two worktrees, `make test` beside a campaign's own tests) never share one. Candidates
+# start at an offset from this process id; CSTEP_TEST_DOMAIN_BASE pins the start.
 TEST_DOMAINS = range(PRIVATE_DOMAINS.stop, 101)
 _BASE = int(os.environ.get("CSTEP_TEST_DOMAIN_BASE", os.getpid() % len(TEST_DOMAINS)))
 _DOMAINS = (TEST_DOMAINS[(_BASE + i) % len(TEST_DOMAINS)] for i in itertools.count())
+DOMAIN_LOCKS = Path(tempfile.gettempdir())
 
 
-def other_test_domain(domain: int) -> int:
-    """A test domain half the range away from ``domain``: one no test near it in time uses."""
-    half = len(TEST_DOMAINS) // 2
-    return TEST_DOMAINS[(TEST_DOMAINS.index(domain) + half) % len(TEST_DOMAINS)]
+@contextlib.contextmanager
+def leased_domain() -> Iterator[int]:
+    """The next test domain no other process holds, held (its lock file flocked) until the
+    block ends."""
+    for _ in TEST_DOMAINS:
+        domain = next(_DOMAINS)
+        with open(DOMAIN_LOCKS / f"cstep-test-domain-{domain}.lock", "a") as lock:
+            try:
+                fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except BlockingIOError:
+                continue  # another test process is on it
+            yield domain
+            return  # closing the file releases the lock
+    raise RuntimeError(
+        f"every test domain ({TEST_DOMAINS.start}-{TEST_DOMAINS.stop - 1}) is held by another "
+        f"test process (lock files cstep-test-domain-N.lock in {DOMAIN_LOCKS})"
+    )
+
+
+@pytest.fixture
+def second_domain() -> Iterator[int]:
+    """A test domain of this test's own besides :func:`ros_domain`, held while it runs."""
+    with leased_domain() as domain:
+        yield domain
 
 
 # The live-node rig (`cstep_node` and `rig` fixtures) lives in node_rig.py.
@@ -58,15 +84,15 @@ DISCOVERY_TIMEOUT_S = 20.0
 
 
 @pytest.fixture(autouse=True)
-def ros_domain(monkeypatch: pytest.MonkeyPatch) -> int:
-    """This test's own ROS domain id; also sets localhost-only discovery."""
-    domain = next(_DOMAINS)
-    monkeypatch.setenv("ROS_DOMAIN_ID", str(domain))
-    monkeypatch.setenv("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
-    monkeypatch.delenv("ROS_LOCALHOST_ONLY", raising=False)  # deprecated; the range rules
-    monkeypatch.delenv("ROS_STATIC_PEERS", raising=False)
-    monkeypatch.setenv("RMW_IMPLEMENTATION", "rmw_fastrtps_cpp")
-    return domain
+def ros_domain(monkeypatch: pytest.MonkeyPatch) -> Iterator[int]:
+    """This test's own ROS domain id, held while it runs; also sets localhost-only discovery."""
+    with leased_domain() as domain:
+        monkeypatch.setenv("ROS_DOMAIN_ID", str(domain))
+        monkeypatch.setenv("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST")
+        monkeypatch.delenv("ROS_LOCALHOST_ONLY", raising=False)  # deprecated; the range rules
+        monkeypatch.delenv("ROS_STATIC_PEERS", raising=False)
+        monkeypatch.setenv("RMW_IMPLEMENTATION", "rmw_fastrtps_cpp")
+        yield domain
 
 
 @pytest.fixture

@@ -10,7 +10,7 @@ import time
 from pathlib import Path
 
 import pytest
-from conftest import DISCOVERY_TIMEOUT_S, REPO, other_test_domain, wait_until
+from conftest import DISCOVERY_TIMEOUT_S, REPO, wait_until
 from cstep_bridge.bag import (
     INPUTS,
     OUTPUTS,
@@ -80,7 +80,7 @@ def feed_in_lockstep(rig) -> None:
 
 
 def test_a_recorded_run_replayed_to_a_fresh_node_gets_the_same_scores(
-    rig, cstep_node, ros_domain, tmp_path
+    rig, cstep_node, second_domain, tmp_path
 ):
     live, replayed = tmp_path / "live", tmp_path / "replayed"
     recorder = bag_command("record", str(live))
@@ -119,7 +119,7 @@ def test_a_recorded_run_replayed_to_a_fresh_node_gets_the_same_scores(
     # A fresh node on a domain of its own, in a namespace (another robot's): only the replay,
     # moved into that namespace, talks to it.
     stop_gently(cstep_node)
-    domain = other_test_domain(ros_domain)
+    domain = second_domain
     log = tmp_path / "fresh-node.log"
     with open(log, "w") as out:
         fresh = subprocess.Popen(

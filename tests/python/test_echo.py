@@ -9,7 +9,7 @@ import time
 
 import pytest
 import yaml
-from conftest import DISCOVERY_TIMEOUT_S, REPO, other_test_domain
+from conftest import DISCOVERY_TIMEOUT_S, REPO
 from node_rig import corridor_scan, cstep_binary, message_to_ordereddict, odometry
 
 
@@ -188,10 +188,10 @@ def test_echo_explains_unknown_types_and_topics_in_one_line(rig, echo):
     assert e.finish() != 0 and "--count" in e.stderr
 
 
-def test_echo_listens_on_ros_domain_id_only(cstep_node, ros_domain, echo):
+def test_echo_listens_on_ros_domain_id_only(cstep_node, second_domain, echo):
     # The node publishes diagnostics every second on this test's domain: on another domain, echo
     # hears nothing and says so; on this one it hears them.
-    other = dict(os.environ, ROS_DOMAIN_ID=str(other_test_domain(ros_domain)))
+    other = dict(os.environ, ROS_DOMAIN_ID=str(second_domain))
     start = time.monotonic()
     e = echo("/diagnostics", "--timeout", "3", env=other)
     assert e.finish() != 0

@@ -7,7 +7,6 @@ that two nodes serve. Real nodes, real rclpy, real DDS, localhost only, a domain
 import subprocess
 import time
 
-import conftest
 import numpy as np
 import pytest
 from conftest import DISCOVERY_TIMEOUT_S, wait_until
@@ -90,10 +89,10 @@ def test_a_node_says_so_while_another_serves_its_service(rig, start_peer):
 
 
 def test_the_bridge_takes_a_domain_nobody_is_on(
-    cstep_node, ros_context, executor, ros_domain, monkeypatch
+    cstep_node, ros_context, executor, ros_domain, second_domain, monkeypatch
 ):
     occupied = ros_domain
-    free = next(conftest._DOMAINS)  # this test's second domain, as the next test would get it
+    free = second_domain
     node = Node("cstep_test_occupant", context=ros_context)
     executor.add_node(node)
     client = node.create_client(Evaluate, "/cstep/evaluate")

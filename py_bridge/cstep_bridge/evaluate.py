@@ -36,6 +36,7 @@ import argparse
 import json
 import shlex
 import sys
+from contextlib import ExitStack
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
@@ -48,6 +49,7 @@ from .episode_cache import EpisodeCache
 from .flights import configurations, fly_model
 from .paper_results import PaperAgent
 from .plots import MapPanel, Path2D, paths_figure, seed_figure, threshold_figure, training_curves
+from .ray_backend import RayPool, RayUnavailable
 
 FINE_THRESHOLDS = tuple(np.round(np.arange(0.05, 0.501, 0.025), 3))
 DRONE_PANELS = 6
@@ -430,7 +432,25 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         "action under its own noise (docs/results/protocol.md, e01) or its action sampled as in "
         "training, seeded per episode (e02; default: %(default)s)",
     )
-    ap.add_argument("--jobs", type=int, default=1, help="worker processes per agent")
+    ap.add_argument(
+        "--jobs",
+        type=int,
+        default=1,
+        help="worker processes per agent; with --backend ray and no --address, the CPUs of the "
+        "local Ray",
+    )
+    ap.add_argument(
+        "--backend",
+        choices=("local", "ray"),
+        default="local",
+        help="local: the episodes flown by worker processes here (default); ray: as Ray tasks "
+        "(the `ray` extra), on a local Ray or the cluster at --address",
+    )
+    ap.add_argument(
+        "--address",
+        help="with --backend ray: the Ray cluster to join (its workers must read the models' "
+        "paths: a filesystem they share)",
+    )
     ap.add_argument(
         "--cache",
         type=Path,
@@ -443,6 +463,8 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         ap.error(f"{len(args.label)} --label for {len(args.model)} --model: give one per model")
     if args.episodes is not None and args.episodes <= 0 or args.jobs <= 0:
         ap.error("--episodes and --jobs must be > 0")
+    if args.address and args.backend != "ray":
+        ap.error("--address goes with --backend ray")
     return args
 
 
@@ -465,26 +487,42 @@ def main(argv: list[str] | None = None) -> int:
     cache = EpisodeCache(args.cache) if args.cache else None
     runs: dict[str, list[list[metrics.Episode]]] = {}
     summaries, intervals, tests = {}, {}, {}
-    for label, seeds in groups.items():
-        runs[label] = []
-        for model in seeds:
-            print(
-                f"{label}: {len(indices)} episodes on {env}, acting by its {args.action} "
-                f"({model.model})",
-                flush=True,
-            )
-            runs[label].append(
-                fly_model(model.model, env, indices, args.jobs, args.eval_set, cache, args.action)
-            )
-            s = metrics.summarize(runs[label][-1], line)
-            print(
-                f"  success {s.success_rate:.0%}, collisions {s.collision_rate:.0%}, "
-                f"cleared {_fmt(s.cleared_rate, '.0%')}, "
-                f"clear time {_fmt(s.clear_time, '.2f', ' s')}",
-                flush=True,
-            )
-        summaries[label] = metrics.summarize([e for run in runs[label] for e in run], line)
-        intervals[label] = comparison.intervals(runs[label], line)
+    with ExitStack() as stack:
+        pool = None
+        if args.backend == "ray":  # the episodes as Ray tasks, else worker processes here
+            try:
+                pool = stack.enter_context(RayPool(args.address, args.jobs))
+            except RayUnavailable as err:
+                raise SystemExit(str(err)) from err
+        for label, seeds in groups.items():
+            runs[label] = []
+            for model in seeds:
+                print(
+                    f"{label}: {len(indices)} episodes on {env}, acting by its {args.action} "
+                    f"({model.model})",
+                    flush=True,
+                )
+                runs[label].append(
+                    fly_model(
+                        model.model,
+                        env,
+                        indices,
+                        args.jobs,
+                        args.eval_set,
+                        cache,
+                        args.action,
+                        pool,
+                    )
+                )
+                s = metrics.summarize(runs[label][-1], line)
+                print(
+                    f"  success {s.success_rate:.0%}, collisions {s.collision_rate:.0%}, "
+                    f"cleared {_fmt(s.cleared_rate, '.0%')}, "
+                    f"clear time {_fmt(s.clear_time, '.2f', ' s')}",
+                    flush=True,
+                )
+            summaries[label] = metrics.summarize([e for run in runs[label] for e in run], line)
+            intervals[label] = comparison.intervals(runs[label], line)
     base_label, base_runs = next(iter(runs.items()))
     for label, seeds in list(runs.items())[1:]:
         tests[label] = comparison.versus_baseline(base_runs, seeds, line)

@@ -9,7 +9,8 @@ the simulation): what :mod:`~cstep_bridge.episode_cache` keys its entries on.
 
 from __future__ import annotations
 
-from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures import Executor, ProcessPoolExecutor
+from contextlib import ExitStack
 from multiprocessing import get_context
 from pathlib import Path
 from typing import Any
@@ -133,10 +134,12 @@ def fly_model(
     eval_set: Path | None = None,
     cache: EpisodeCache | None = None,
     acting: str = DEFAULT_ACTING_RULE,
+    pool: Executor | None = None,
 ) -> list[metrics.Episode]:
     """Configurations ``indices`` flown by the model at ``model`` under the ``acting`` rule, over
-    ``jobs`` worker processes; with a ``cache``, only those it does not hold yet, each chunk of
-    :data:`CHUNK` stored as soon as it is flown."""
+    ``jobs`` worker processes (or the ``pool`` given, e.g. a
+    :class:`~cstep_bridge.ray_backend.RayPool`); with a ``cache``, only those it does not hold
+    yet, each chunk of :data:`CHUNK` stored as soon as it is flown."""
     key = entry_key(model, env, eval_set, acting) if cache else ""
     done = cache.load(key) if cache else {}
     missing = [i for i in indices if i not in done]
@@ -146,9 +149,11 @@ def fly_model(
         )
     if missing:
         chunks = [missing[i : i + CHUNK] for i in range(0, len(missing), CHUNK)]
-        k = min(jobs, len(chunks))
-        with ProcessPoolExecutor(k, mp_context=get_context("spawn")) as pool:
-            n = len(chunks)
+        n = len(chunks)
+        with ExitStack() as stack:
+            if pool is None:
+                spawn = get_context("spawn")
+                pool = stack.enter_context(ProcessPoolExecutor(min(jobs, n), mp_context=spawn))
             for part in pool.map(fly, [model] * n, [env] * n, chunks, [eval_set] * n, [acting] * n):
                 done.update((e.config, e) for e in part)
                 if cache:

@@ -7,13 +7,16 @@ import sys
 from conftest import REPO
 
 
-def run(module: str, *args: str, ok: bool = True) -> subprocess.CompletedProcess:
-    """``python -m cstep_bridge.<module> args``; asserts it succeeded (or, ``ok=False``, failed)."""
+def run(
+    module: str, *args: str, ok: bool = True, timeout: float = 300
+) -> subprocess.CompletedProcess:
+    """``python -m cstep_bridge.<module> args``, given ``timeout`` seconds; asserts it succeeded
+    (or, ``ok=False``, failed)."""
     proc = subprocess.run(
         [sys.executable, "-m", f"cstep_bridge.{module}", *args],
         capture_output=True,
         text=True,
-        timeout=300,
+        timeout=timeout,
         env=dict(os.environ, PYTHONPATH=str(REPO / "py_bridge")),
         cwd=REPO,
         check=False,

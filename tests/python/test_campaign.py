@@ -4,13 +4,16 @@ real `cstep node` over real DDS), real exports, and a second invocation that fin
 import json
 import re
 import shutil
+import sys
 from pathlib import Path
 
 import pytest
 import yaml
 from conftest import REPO
 from cstep_bridge.campaign import Plan
+from cstep_bridge.campaign import main as campaign_main
 from cstep_bridge.curriculum import Curriculum
+from cstep_bridge.ray_backend import RayPool, RayUnavailable
 from module_cli import run
 
 TINY = [
@@ -147,3 +150,15 @@ def test_a_committed_plan_still_trains_what_its_committed_models_were_trained_wi
         assert args.n_envs == COMPARISON_N_ENVS, scheduled.export
         checked += 1
     assert checked, f"{plan_file}: no committed model to check"
+
+
+def test_backend_ray_without_ray_installed_says_how_to_install_it(tmp_path, monkeypatch, capsys):
+    """Ray is an optional extra: asked for without it, the campaign stops with the install
+    command, not a traceback, and the evaluation's pool raises it (evaluate exits with it)."""
+    monkeypatch.setitem(sys.modules, "ray", None)  # `import ray` raises ImportError
+    plan = write_plan(tmp_path)
+    with pytest.raises(SystemExit):
+        campaign_main([str(plan), "--root", str(tmp_path), "--backend", "ray"])
+    assert "pip install 'py_bridge[ray]'" in capsys.readouterr().err
+    with pytest.raises(RayUnavailable, match=re.escape("pip install 'py_bridge[ray]'")):
+        RayPool(None, 1)

@@ -243,13 +243,28 @@ def seed_interval(
     x = np.asarray(scores, dtype=float)
     if x.ndim != 1 or x.size == 0 or not np.all(np.isfinite(x)):
         raise ValueError(f"scores must be finite per-seed values, not {scores!r}")
-    fn = _statistic(statistic)
-    value = float(fn(x))
-    if x.size == 1 or np.all(x == x[0]):
+    degenerate = x.size == 1 or bool(np.all(x == x[0]))
+    return _percentile_bootstrap(
+        (x,), _statistic(statistic), degenerate, confidence, resamples, seed
+    )
+
+
+def _percentile_bootstrap(
+    samples: tuple[np.ndarray, ...],
+    statistic: Callable[..., np.ndarray],
+    degenerate: bool,
+    confidence: float,
+    resamples: int,
+    seed: int,
+) -> Interval:
+    """``statistic`` of ``samples`` with SciPy's percentile bootstrap interval (each sample
+    resampled apart, seeded); a point where resampling cannot vary it (``degenerate``)."""
+    value = float(statistic(*samples))
+    if degenerate:
         return Interval(value, value, value)
     res = stats.bootstrap(
-        (x,),
-        fn,
+        samples,
+        statistic,
         confidence_level=confidence,
         n_resamples=resamples,
         method="percentile",
@@ -276,18 +291,8 @@ def probability_of_improvement(
     """How likely a seed of ``agent`` beats a seed of ``baseline`` (per-seed scores; 0.5: neither
     is better), with a percentile bootstrap interval that resamples each agent's seeds apart."""
     a, b = np.asarray(baseline, dtype=float), np.asarray(agent, dtype=float)
-    value = float(_improvement(a, b))
-    if a.size < 2 or b.size < 2 or np.all(np.concatenate([a, b]) == a[0]):
-        return Interval(value, value, value)
-    res = stats.bootstrap(
-        (a, b),
-        _improvement,
-        confidence_level=confidence,
-        n_resamples=resamples,
-        method="percentile",
-        rng=np.random.default_rng(seed),
-    )
-    return Interval(value, float(res.confidence_interval.low), float(res.confidence_interval.high))
+    degenerate = a.size < 2 or b.size < 2 or bool(np.all(np.concatenate([a, b]) == a[0]))
+    return _percentile_bootstrap((a, b), _improvement, degenerate, confidence, resamples, seed)
 
 
 SEED_SCORES = ("success", "collision", "success_minus_collision")

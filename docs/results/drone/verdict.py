@@ -110,25 +110,20 @@ def verdict(doc: dict) -> list[str]:
         )
     row("1. the empowered agent learns", cells)
 
-    cells = []
-    for a in agents:
-        ours, theirs = rate[a]["success_rate"], rate[base]["success_rate"]
-        word = reading(ours > theirs, p_success[a], wanted_more=True)
-        paper = PAPER.get(paper_key(a), (None,))[0]
-        cells.append(
-            f"{word}: {100 * ours:.1f} % vs {100 * theirs:.1f} % (p = {p_success[a]:.2g}; "
-            f"paper {paper} vs 82 %)"
-        )
-    row("2. succeeds more often", cells)
-
-    cells = []
-    for a in agents:
-        ours, theirs = rate[a]["collision_rate"], rate[base]["collision_rate"]
-        word = reading(ours < theirs, p_collision[a], wanted_more=True)
-        cells.append(
-            f"{word}: {100 * ours:.1f} % vs {100 * theirs:.1f} % (p = {p_collision[a]:.2g})"
-        )
-    row("3. collides less", cells)
+    for claim, key, pvalues, more_is_better in (
+        ("2. succeeds more often", "success_rate", p_success, True),
+        ("3. collides less", "collision_rate", p_collision, False),
+    ):
+        cells = []
+        for a in agents:
+            ours, theirs = rate[a][key], rate[base][key]
+            word = reading((ours > theirs) == more_is_better, pvalues[a], wanted_more=True)
+            paper = PAPER.get(paper_key(a), (None,))[0] if more_is_better else None
+            cells.append(
+                f"{word}: {100 * ours:.1f} % vs {100 * theirs:.1f} % (p = {pvalues[a]:.2g}"
+                + (f"; paper {paper} vs 82 %)" if paper else ")")
+            )
+        row(claim, cells)
 
     cells = []
     for a in agents:

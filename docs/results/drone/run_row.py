@@ -33,38 +33,79 @@ def steps_text(steps: float) -> str:
     return f"{steps / 1e3:.0f} k"
 
 
-def row(run: Path, change: str) -> str:
-    """The run's table row (see the module docstring)."""
-    progress = [
-        m for line in (run / "train.log").read_text().splitlines() if (m := PROGRESS.match(line))
-    ]
-    if not progress:
-        raise SystemExit(f"{run}: no progress line in train.log")
-    steps, train_success, train_collisions, minutes = progress[-1].groups()
+def measures(run: Path) -> dict:
+    """The run's figures as numbers (rates as fractions): ``steps``, ``minutes``, ``level``
+    (the last curriculum level, or None), ``level_step``, ``train_success``,
+    ``train_collisions``, ``validation`` (the last best validation's ``success``,
+    ``collisions``, ``steps``, or None) and ``arenas`` (the 100 arenas' ``success`` and
+    ``collisions``, or None before an evaluation); the training figures are None where
+    ``train.log`` has no progress line."""
+    log = run / "train.log"
+    lines = log.read_text().splitlines() if log.exists() else []  # the earliest runs kept none
+    progress = [m for line in lines if (m := PROGRESS.match(line))]
+    last = progress[-1].groups() if progress else (None,) * 4
+    steps, train_success, train_collisions, minutes = last
     settings = json.loads((run / "run.json").read_text())
-    level = "–"
+    level = level_step = None
     curriculum_file = run / "curriculum.json"
     if curriculum_file.exists() and settings.get("curriculum"):
-        step, index = json.loads(curriculum_file.read_text())["history"][-1]
-        level = f"{settings['curriculum']['levels'][index]:.1f} ({steps_text(step)})"
-    with (run / "validation.csv").open(newline="") as f:
-        best = [r for r in csv.DictReader(f) if r["best"].strip() == "1"]
+        state = json.loads(curriculum_file.read_text())
+        if "history" in state:
+            level_step, index = state["history"][-1]
+        else:  # the first curriculum runs kept only the level they stood at
+            level_step, index = state["step"], state["level"]
+        level = settings["curriculum"]["levels"][index]
+    validation = None
+    validation_file = run / "validation.csv"
+    if validation_file.exists():
+        with validation_file.open(newline="") as f:
+            best = [r for r in csv.DictReader(f) if r["best"].strip() == "1"]
+        if best:
+            validation = {
+                "success": float(best[-1]["success_rate"]),
+                "collisions": float(best[-1]["collision_rate"]),
+                "steps": int(best[-1]["steps"]),
+            }
+    arenas = None
+    results = run / "eval" / "results.json"
+    if results.exists():
+        (summary,) = json.loads(results.read_text())["summaries"].values()
+        arenas = {"success": summary["success_rate"], "collisions": summary["collision_rate"]}
+    return {
+        "steps": None if steps is None else int(steps),
+        "minutes": None if minutes is None else float(minutes),
+        "level": level,
+        "level_step": level_step,
+        "train_success": None if train_success is None else int(train_success) / 100,
+        "train_collisions": None if train_collisions is None else int(train_collisions) / 100,
+        "validation": validation,
+        "arenas": arenas,
+    }
+
+
+def row(run: Path, change: str) -> str:
+    """The run's table row (see the module docstring)."""
+    m = measures(run)
+    if m["steps"] is None:
+        raise SystemExit(f"{run}: no progress line in train.log")
+    level = "–" if m["level"] is None else f"{m['level']:.1f} ({steps_text(m['level_step'])})"
     validation = "0 %"
-    if best and float(best[-1]["success_rate"]) > 0:
-        b = best[-1]
+    if m["validation"] and m["validation"]["success"] > 0:
+        v = m["validation"]
         validation = (
-            f"{100 * float(b['success_rate']):g} % ({steps_text(int(b['steps']))}, "
-            f"{100 * float(b['collision_rate']):g} % coll.)"
+            f"{100 * v['success']:g} % ({steps_text(v['steps'])}, "
+            f"{100 * v['collisions']:g} % coll.)"
         )
-    (summary,) = json.loads((run / "eval" / "results.json").read_text())["summaries"].values()
-    arenas = f"{100 * summary['success_rate']:.0f} % / {100 * summary['collision_rate']:.0f} %"
+    if m["arenas"] is None:
+        raise SystemExit(f"{run}: no eval/results.json")
+    arenas = f"{100 * m['arenas']['success']:.0f} % / {100 * m['arenas']['collisions']:.0f} %"
     cells = [
         run.name,
         change,
-        steps_text(round(int(steps), -4)),
-        f"{float(minutes):.0f}",
+        steps_text(round(m["steps"], -4)),
+        f"{m['minutes']:.0f}",
         level,
-        f"{train_success} % / {train_collisions} %",
+        f"{round(100 * m['train_success'])} % / {round(100 * m['train_collisions'])} %",
         validation,
         arenas,
     ]

@@ -23,7 +23,8 @@
 //!
 //! [`parameters`] defines every parameter once (type, default, range, unit, description, live or
 //! read-only); [`config`] reads the node's `ros__parameters` YAML against it;
-//! [`input_file`] reads every file a user names, regular files of bounded size only; [`arena`],
+//! [`input_file`] reads every file a user names, regular files of bounded size only; [`suggest`]
+//! names the known name a misspelt one most likely meant; [`arena`],
 //! [`scene`] and [`plot`] are the demo's simulated world and its plot.
 
 pub mod arena;
@@ -42,4 +43,5 @@ pub mod sampling;
 pub mod scene;
 pub mod scoring;
 pub mod state;
+pub mod suggest;
 pub mod volume;

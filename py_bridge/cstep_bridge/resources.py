@@ -12,9 +12,10 @@ The node's files are not part of this package, so they are looked for in order, 
 
 "The checkout" is the repository this package sits in (``py_bridge/cstep_bridge`` two levels
 below its ``Cargo.toml``), as with ``pip install -e`` or ``PYTHONPATH=py_bridge``; an installed
-copy has none. A place named explicitly (an argument or a variable) must hold the file: it is an
-error, not a reason to look further. When nothing is found, :class:`ResourceNotFound` names every
-place tried.
+copy has none. A place named explicitly (an argument or a variable) must hold the file (for the
+binary: an executable file): it is an error, not a reason to look further. When nothing is found,
+:class:`ResourceNotFound` names every place tried and what was wrong there (missing, not
+executable, not a file).
 """
 
 from __future__ import annotations
@@ -60,29 +61,48 @@ def _ament_place(*parts: str) -> tuple[str, Path | None]:
     return f"the ament index: no {AMENT_PACKAGE} package in $AMENT_PREFIX_PATH", None
 
 
-def _first(what: str, places: list[tuple[str, Path | None]], hint: str) -> Path:
+def _missing(path: Path) -> str | None:
+    """Why ``path`` cannot be used as a file to read: None when it exists."""
+    return None if path.exists() else "missing"
+
+
+def _not_runnable(path: Path) -> str | None:
+    """Why ``path`` cannot be run as the binary: None when it is an executable file. A file
+    without execute permission would otherwise be found and fail in ``subprocess`` with a raw
+    :class:`PermissionError`."""
+    if not path.exists():
+        return "missing"
+    if not path.is_file():
+        return "not a file"
+    return None if os.access(path, os.X_OK) else "not executable"
+
+
+def _first(what: str, places: list[tuple[str, Path | None]], hint: str, problem=_missing) -> Path:
     """The first path of ``places`` (each a description and a path, or None where the place
-    offers none) that exists; else :class:`ResourceNotFound` for ``what``, listing every place
-    tried, then ``hint``. A place named explicitly (argument, variable) comes alone: a wrong
-    setting is an error, never a reason to look further."""
+    offers none) that ``problem`` finds nothing wrong with (default: that exists); else
+    :class:`ResourceNotFound` for ``what``, listing every place tried with what was wrong there,
+    then ``hint``. A place named explicitly (argument, variable) comes alone: a wrong setting is
+    an error, never a reason to look further."""
     tried = []
     for place, path in places:
-        if path is not None and path.exists():
+        why = None if path is None else problem(path)
+        if path is not None and why is None:
             return path
-        tried.append(place if path is None else f"{place}: {path} (missing)")
+        tried.append(place if path is None else f"{place}: {path} ({why})")
     lines = "".join(f"\n  - {place}" for place in tried)
     raise ResourceNotFound(f"{what} not found; looked in:{lines}\n{hint}")
 
 
 def cstep_binary(explicit: Path | str | None = None) -> Path:
     """The `cstep` executable: ``explicit``, else the first found in the order the module
-    docstring gives. Raises :class:`ResourceNotFound` naming every place tried."""
+    docstring gives. Raises :class:`ResourceNotFound` naming every place tried and, where a file
+    was there but cannot be run (not executable, a directory), saying so."""
     what = "the cstep binary"
     hint = f"Build it (cargo build --release) or set {BINARY_VAR} to the binary."
     if explicit:
-        return _first(what, [("the binary argument", Path(explicit))], hint)
+        return _first(what, [("the binary argument", Path(explicit))], hint, _not_runnable)
     if os.environ.get(BINARY_VAR):
-        return _first(what, [(f"${BINARY_VAR}", Path(os.environ[BINARY_VAR]))], hint)
+        return _first(what, [(f"${BINARY_VAR}", Path(os.environ[BINARY_VAR]))], hint, _not_runnable)
     on_path = shutil.which("cstep")
     target = os.environ.get("CARGO_TARGET_DIR") or (CHECKOUT and CHECKOUT / "target")
     places = [
@@ -93,7 +113,7 @@ def cstep_binary(explicit: Path | str | None = None) -> Path:
         if target
         else ("the checkout's release build: cstep_bridge is not in a checkout", None),
     ]
-    return _first(what, places, hint)
+    return _first(what, places, hint, _not_runnable)
 
 
 def share_file(relative: str) -> Path:

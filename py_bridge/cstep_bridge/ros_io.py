@@ -26,7 +26,9 @@ A state reported ``in_collision`` (the simulator saw contact) is scored by the n
 rolling out: empowerment at the floor, ``valid`` false, status "robot already in collision",
 reward ``task_reward · (ln c + floor)``.
 
-Either way a missing reply raises :class:`RewardTimeout` after ``timeout`` seconds: never a silent 0.
+Either way a missing reply raises :class:`RewardTimeout` after ``timeout`` seconds: never a silent 0;
+a private node that exits meanwhile raises :class:`NodeDied` (both from
+:mod:`cstep_bridge.errors`, exported by the package).
 When no node is given, :class:`CStepNode` starts a private ``cstep node`` on its own ROS domain
 (localhost-only discovery) and kills it by its PID on close. That domain is one the bridge has
 watched for :data:`PROBE_S` seconds with its own node on it and found nobody else on
@@ -64,6 +66,7 @@ from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy, qos_profi
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import LaserScan
 
+from .errors import NodeDied, RewardTimeout
 from .resources import config_file, cstep_binary
 from .sim import DroneState
 from .world import LIDAR_ANGLE_INCREMENT, LIDAR_ANGLE_MIN, LIDAR_RANGE, LIDAR_RANGE_MIN
@@ -87,10 +90,6 @@ SERVICE = "/cstep/evaluate_batch"
 # 3, no fragmented reply reached rclpy and calls were capped at 4 states). The tuned protocols'
 # 8 envs go in one call.
 STATES_PER_CALL = 32
-
-
-class RewardTimeout(RuntimeError):
-    """The node did not answer in time."""
 
 
 # How long the bridge watches a candidate domain, its own node on it, for other participants
@@ -366,11 +365,9 @@ class RosBridge:
             self.rewards.pop(next(iter(self.rewards)))
 
     def _check_node(self, what: str) -> None:
+        """Raises :class:`NodeDied` when this bridge's own node has exited."""
         if self.cstep is not None and not self.cstep.alive():
-            raise RuntimeError(
-                f"the cstep node exited ({self.cstep.proc.returncode}) while waiting for "
-                f"{what}; its log:\n{self.cstep.log_tail()}"
-            )
+            raise NodeDied(self.cstep.proc.returncode, what, self.cstep.log_tail())
 
     def _timed_out(self, what: str, timeout: float) -> RewardTimeout:
         """The error for a reply that never came; with this bridge's own node, the end of its

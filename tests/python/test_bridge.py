@@ -9,6 +9,7 @@ import sys
 import time
 from pathlib import Path
 
+import cstep_bridge
 import numpy as np
 import pybullet as p
 import pytest
@@ -282,6 +283,30 @@ def test_a_reply_that_does_not_come_times_out_and_a_late_one_is_not_taken_for_th
         again = bridge.evaluate(state, ranges, 3.0)
         assert again.reward == first.reward
         assert again.reward_msg.header.stamp.sec == 3
+    finally:
+        sim.close()
+        bridge.close()
+
+
+def test_a_node_that_dies_is_a_typed_error_exported_by_the_package(ros_domain):
+    """Issue 44: the node's death was a bare RuntimeError, which a training loop could not tell
+    from any other. It is a NodeDied (still a RuntimeError) with the exit code and the log."""
+    bridge = RosBridge(domain_id=ros_domain, timeout=5.0)
+    sim = DroneSim(arena(-0.9))
+    try:
+        state, ranges = sim.state(), sim.scan()
+        bridge.evaluate(state, ranges, 1.0)
+        bridge.cstep.proc.kill()  # this node's PID only
+        bridge.cstep.proc.wait(timeout=10)
+        with pytest.raises(cstep_bridge.NodeDied) as died:
+            bridge.evaluate(state, ranges, 2.0)
+        assert isinstance(died.value, RuntimeError)
+        assert died.value.returncode == -signal.SIGKILL
+        assert str(died.value).startswith(
+            f"the cstep node exited ({-signal.SIGKILL}) while waiting for "
+            "/cstep/evaluate_batch reply; its log:\n"
+        )
+        assert "cstep node /cstep_node on ROS_DOMAIN_ID" in died.value.log
     finally:
         sim.close()
         bridge.close()

@@ -212,6 +212,33 @@ def test_cstep_bin_pointing_at_nothing_is_an_error_not_a_fallback(nothing_to_fin
     assert str(error.value) == message
 
 
+def test_cstep_bin_that_cannot_run_is_the_same_error_as_a_missing_one(nothing_to_find, monkeypatch):
+    """Issue 44: a ``$CSTEP_BIN`` without execute permission was found, and starting the node
+    failed with a raw PermissionError traceback. It is refused as a missing one is, saying why."""
+    executable(nothing_to_find / "target/release/cstep")  # would be found without the variable
+    hint = "Build it (cargo build --release) or set CSTEP_BIN to the binary."
+    plain = nothing_to_find / "plain-cstep"
+    plain.write_text("#!/bin/sh\n")
+    plain.chmod(0o644)
+    directory = nothing_to_find / "a-directory"
+    directory.mkdir()
+    for path, why in ((plain, "not executable"), (directory, "not a file")):
+        monkeypatch.setenv(resources.BINARY_VAR, str(path))
+        message = f"the cstep binary not found; looked in:\n  - $CSTEP_BIN: {path} ({why})\n{hint}"
+        with pytest.raises(ResourceNotFound) as error:
+            resources.cstep_binary()
+        assert str(error.value) == message
+        with pytest.raises(ResourceNotFound) as error:
+            CStepNode(domain_id=1)
+        assert str(error.value) == message
+    # Looking further, a release build that cannot run is passed over, and said so.
+    monkeypatch.delenv(resources.BINARY_VAR)
+    (nothing_to_find / "target/release/cstep").chmod(0o644)
+    with pytest.raises(ResourceNotFound) as error:
+        resources.cstep_binary()
+    assert f"{nothing_to_find / 'target/release/cstep'} (not executable)" in str(error.value)
+
+
 def test_share_files_come_from_cstep_root_then_the_ament_index_then_the_checkout(
     nothing_to_find, monkeypatch
 ):

@@ -1,6 +1,7 @@
 """PyBullet world of the paper's drone experiment: arena, obstacle block, Crazyflie, 2D LiDAR, PID.
 
-Geometry as the authors' prototype codes it (see ``src/arena.rs``): the inner area is
+Geometry as the authors' prototype codes it (``config/paper_world.json``, which the Rust core's
+``arena.rs`` reads too; :mod:`~cstep_bridge.paper_world`): the inner area is
 x ∈ [−0.5, 4.5], y ∈ [−1.75, 0.75], z ∈ [0, 2] (the paper's 5 m × 2.5 m × 2 m); the obstacle is
 two 1.0 m × 0.5 m blocks centred at (1, ``block_y``) and (2, ``block_y``), i.e. one 2 m × 0.5 m
 block spanning x ∈ [0.5, 2.5], y ∈ [``block_y`` − 0.25, ``block_y`` + 0.25], 2 m high, with
@@ -31,6 +32,7 @@ from pathlib import Path
 import numpy as np
 import pybullet as p
 
+from .paper_world import ARENA
 from .resources import drone_urdf
 from .world import (
     LIDAR_BEAMS,  # noqa: F401 (re-exported: the drone carries the shared LiDAR)
@@ -101,13 +103,15 @@ class Arena:
     """The arena of the drone experiment (metres, world frame)."""
 
     block_y: float = 0.0
-    bounds: tuple[float, float, float, float] = (-0.5, -1.75, 4.5, 0.75)
-    block_x: tuple[float, float] = (0.5, 2.5)
-    block_width: float = 0.5
-    height: float = 2.0
-    altitude: float = 1.0
-    start: np.ndarray = field(default_factory=lambda: np.array([-0.15, -0.6, 1.0]))
-    goal: np.ndarray = field(default_factory=lambda: np.array([3.5, -0.6, 1.0]))
+    bounds: tuple[float, float, float, float] = tuple(ARENA["bounds"])
+    block_x: tuple[float, float] = tuple(ARENA["block_x"])
+    block_width: float = ARENA["block_width"]
+    height: float = ARENA["height"]
+    altitude: float = ARENA["altitude"]
+    start: np.ndarray = field(
+        default_factory=lambda: np.array([*ARENA["start"], ARENA["altitude"]])
+    )
+    goal: np.ndarray = field(default_factory=lambda: np.array([*ARENA["goal"], ARENA["altitude"]]))
 
     @property
     def block(self) -> tuple[float, float, float, float]:
@@ -117,9 +121,10 @@ class Arena:
     @classmethod
     def random(cls, rng: np.random.Generator) -> Arena:
         """One configuration drawn as the prototype draws it."""
-        block_y = rng.uniform(-1.0, 0.3)
-        start = np.array([rng.uniform(-0.3, 0.0), rng.uniform(-1.6, 0.4), 1.0])
-        goal = np.array([rng.uniform(2.7, 4.2), rng.uniform(-1.6, 0.4), 1.0])
+        draws, z = ARENA["draws"], ARENA["altitude"]
+        block_y = rng.uniform(*draws["block_y"])
+        start = np.array([rng.uniform(*draws["start_x"]), rng.uniform(*draws["start_y"]), z])
+        goal = np.array([rng.uniform(*draws["goal_x"]), rng.uniform(*draws["goal_y"]), z])
         return cls(block_y=block_y, start=start, goal=goal)
 
     def wall_distance(self, xy: np.ndarray) -> float:

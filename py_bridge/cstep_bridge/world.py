@@ -13,20 +13,22 @@ import math
 import numpy as np
 import pybullet as p
 
-# The LiDAR of the paper: 180 beams over 360°, 3 m range.
-LIDAR_BEAMS = 180
-LIDAR_RANGE = 3.0
-LIDAR_RANGE_MIN = 0.02
+from .paper_world import LIDAR
+
+# The LiDAR of the paper (config/paper_world.json): 180 beams over 360°, 3 m range.
+LIDAR_BEAMS: int = LIDAR["beams"]
+LIDAR_RANGE: float = LIDAR["range_max"]
+LIDAR_RANGE_MIN: float = LIDAR["range_min"]
 LIDAR_ANGLE_MIN = -math.pi
 LIDAR_ANGLE_INCREMENT = 2 * math.pi / LIDAR_BEAMS
 
 PHYSICS_HZ = 240
+"""Physics steps per second in every world (the paper's 240 Hz)."""
 
 # Frames for ``render_mode="rgb_array"``: size (width, height) in pixels and the camera's field
 # of view (degrees).
 RENDER_SIZE = (480, 480)
 RENDER_FOV_DEG = 60.0
-"""Physics steps per second in every world (the paper's 240 Hz)."""
 
 Rect = tuple[float, float, float, float]
 """An axis-aligned rectangle in the plane: (x0, y0, x1, y1), metres, x0 < x1 and y0 < y1."""

@@ -45,6 +45,7 @@ from .collision import COLLISION_VALUES, held_return
 from .curriculum import training_endpoints, training_fraction
 from .envs import REWARD_SOURCES
 from .sim import CONTROL_HZ, Arena, DroneSim, DroneState
+from .task_reward import task_reward
 from .world import LIDAR_BEAMS, LIDAR_RANGE, clipped_ranges
 
 MAX_TILT = 0.9
@@ -270,7 +271,7 @@ class EmpoweredRewardEnv(gym.Env):
         ``t``; an empowered env adds the node's task_reward, empowerment and reward_valid to
         ``info``, or when deferred returns NaN and leaves the :class:`RewardRequest` there."""
         if not self.empowered:
-            return math.exp(-distance)
+            return task_reward(distance)
         request = RewardRequest(state, ranges, t, self.sim.goal)
         if info["collision"] and self.collision_value == "floor":
             request.in_collision = True

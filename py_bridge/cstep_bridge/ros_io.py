@@ -69,6 +69,7 @@ from sensor_msgs.msg import LaserScan
 from .errors import NodeDied, RewardTimeout
 from .resources import config_file, cstep_binary
 from .sim import DroneState
+from .task_reward import task_reward
 from .world import LIDAR_ANGLE_INCREMENT, LIDAR_ANGLE_MIN, LIDAR_RANGE, LIDAR_RANGE_MIN
 
 RELIABLE = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
@@ -575,7 +576,7 @@ class RosBridge:
         key = (scan.header.stamp.sec, scan.header.stamp.nanosec)
         expected = 1.0
         if self.goal is not None:
-            expected = math.exp(-float(np.linalg.norm(self.goal - state.position)))
+            expected = task_reward(float(np.linalg.norm(self.goal - state.position)))
         deadline = time.monotonic() + self.timeout
         while True:
             if self.goal is not None:

@@ -1,12 +1,72 @@
 //! The paper's drone arena — the inner 5 m × 2.5 m area, its walls, the obstacle block — and a
 //! scripted flight past the block, for the demo and for tests that want the paper's setting.
+//!
+//! The arena's and the LiDAR's numbers live in `config/paper_world.json`, compiled in here and
+//! read by the Python package's simulation too (its `data/paper_world.json` is that file), so
+//! the two sides cannot drift apart.
+
+use std::sync::LazyLock;
 
 use nalgebra::{Vector2, Vector3};
+use serde::Deserialize;
 
-use crate::scene::Scene;
+use crate::scene::{Lidar, Scene};
 
-/// Half the obstacle block's lateral (y) extent, metres: the prototype's blocks are 0.5 m wide.
-pub const BLOCK_HALF_WIDTH: f64 = 0.25;
+/// `config/paper_world.json`, as compiled in.
+pub const PAPER_WORLD_JSON: &str = include_str!("../../../config/paper_world.json");
+
+/// The paper's world as `config/paper_world.json` states it.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PaperWorld {
+    /// The arena's geometry.
+    pub arena: ArenaSpec,
+    /// The drone's scanner.
+    pub lidar: Lidar,
+}
+
+/// The arena's geometry in `config/paper_world.json` (metres, world frame).
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ArenaSpec {
+    /// Inner area `(x_min, y_min, x_max, y_max)`.
+    pub bounds: [f64; 4],
+    /// The block's extent along x.
+    pub block_x: [f64; 2],
+    /// The block's lateral (y) extent: the prototype's blocks are 0.5 m wide.
+    pub block_width: f64,
+    /// The walls' height.
+    pub height: f64,
+    /// Flight altitude (the paper's 1 m).
+    pub altitude: f64,
+    /// The fixed arena's start `(x, y)` (the Python env's default episode).
+    pub start: [f64; 2],
+    /// The fixed arena's goal `(x, y)`.
+    pub goal: [f64; 2],
+    /// The ranges the prototype draws each episode's block y, start and goal from, uniformly.
+    pub draws: ArenaDraws,
+}
+
+/// The uniform ranges `[low, high]` of the prototype's random arenas.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ArenaDraws {
+    /// The block's centre y.
+    pub block_y: [f64; 2],
+    /// The start's x.
+    pub start_x: [f64; 2],
+    /// The start's y.
+    pub start_y: [f64; 2],
+    /// The goal's x.
+    pub goal_x: [f64; 2],
+    /// The goal's y.
+    pub goal_y: [f64; 2],
+}
+
+/// The paper's world, read once from [`PAPER_WORLD_JSON`].
+pub static PAPER_WORLD: LazyLock<PaperWorld> = LazyLock::new(|| {
+    serde_json::from_str(PAPER_WORLD_JSON).expect("config/paper_world.json is checked by the tests")
+});
 
 /// The arena with its obstacle block in one lateral position.
 #[derive(Debug, Clone, PartialEq)]
@@ -27,12 +87,14 @@ impl Arena {
     /// 2 m × 0.5 m block spanning x ∈ [0.5, 2.5], y ∈ [`block_y` − 0.25, `block_y` + 0.25] (the
     /// prototype draws `block_y` from U(−1, 0.3) each episode).
     pub fn paper(block_y: f64) -> Self {
-        let bounds = [-0.5, -1.75, 4.5, 0.75];
+        let spec = &PAPER_WORLD.arena;
+        let bounds = spec.bounds;
+        let half_width = spec.block_width / 2.0;
         let block = [
-            0.5,
-            block_y - BLOCK_HALF_WIDTH,
-            2.5,
-            block_y + BLOCK_HALF_WIDTH,
+            spec.block_x[0],
+            block_y - half_width,
+            spec.block_x[1],
+            block_y + half_width,
         ];
         let scene = Scene::open()
             .boxed(bounds[0], bounds[1], bounds[2], bounds[3])
@@ -41,7 +103,7 @@ impl Arena {
             scene,
             bounds,
             block,
-            altitude: 1.0,
+            altitude: spec.altitude,
         }
     }
 }
@@ -99,6 +161,26 @@ impl Flight {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_paper_world_file_reads_and_holds_the_papers_setting() {
+        let world = &*PAPER_WORLD;
+        assert_eq!(world.lidar, Lidar::PAPER);
+        let draws = &world.arena.draws;
+        for range in [
+            draws.block_y,
+            draws.start_x,
+            draws.start_y,
+            draws.goal_x,
+            draws.goal_y,
+        ] {
+            assert!(range[0] < range[1], "{range:?}");
+        }
+        let [x0, y0, x1, y1] = world.arena.bounds;
+        for [x, y] in [world.arena.start, world.arena.goal] {
+            assert!(x0 < x && x < x1 && y0 < y && y < y1);
+        }
+    }
 
     #[test]
     fn the_flight_stays_clear_of_walls_and_block_by_more_than_the_drone_radius() {

@@ -5,6 +5,7 @@
 //! rather than pulled in from a physics engine.
 
 use nalgebra::{UnitQuaternion, Vector2, Vector3};
+use serde::Deserialize;
 
 use crate::occupancy::Scan;
 use crate::state::RobotState;
@@ -26,7 +27,8 @@ pub struct Scene {
 }
 
 /// The scanner: beams evenly spread over a full turn, as the paper's 2D LiDAR.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Lidar {
     /// Number of beams over 360°.
     pub beams: usize,

@@ -339,8 +339,10 @@ fn yaml_value(name: &str, value: &Bound<'_, PyAny>) -> PyResult<Value> {
     }
 }
 
-/// The `cstep_scoring` module: [`Scorer`].
+/// The `cstep_scoring` module: [`Scorer`], and `PAPER_WORLD_JSON`, the paper's world as the core
+/// compiled it in (`config/paper_world.json`), for the Python side to check its own copy against.
 #[pymodule]
 fn cstep_scoring(module: &Bound<'_, PyModule>) -> PyResult<()> {
+    module.add("PAPER_WORLD_JSON", cstep_core::arena::PAPER_WORLD_JSON)?;
     module.add_class::<Scorer>()
 }

@@ -318,6 +318,52 @@ fn malformed_inputs_fail_with_one_line_naming_file_and_field() {
 }
 
 #[test]
+fn misspelt_fields_are_refused_with_their_path_and_the_field_meant() {
+    // Issue 45, item 5: "pos" for "position" and "linaer" for "linear" were silently dropped
+    // and the odometry scored as a robot at the origin at rest, exit code 0.
+    let dir = workdir("misspelt");
+    let (good_odom, good_scan) = write_valid_inputs(&dir);
+    let odom = write(
+        &dir,
+        "typo_odom.json",
+        r#"{"pose": {"pose": {"pos": {"x": 1.0, "y": 0.2, "z": 1.0}}},
+            "twist": {"twist": {"linaer": {"x": 0.5}}}}"#,
+    );
+    assert_clear_error(
+        &eval(&odom, &good_scan, &[]),
+        "typo_odom.json",
+        "not a valid message: pose.pose.pos: unknown field, did you mean `position`?",
+    );
+    let odom = write(
+        &dir,
+        "typo_twist.json",
+        r#"{"twist": {"twist": {"linaer": {"x": 0.5}}}}"#,
+    );
+    assert_clear_error(
+        &eval(&odom, &good_scan, &[]),
+        "typo_twist.json",
+        "twist.twist.linaer: unknown field, did you mean `linear`?",
+    );
+    let mut scan = serde_json::to_value(corridor_scan()).unwrap();
+    let ranges = scan.as_object_mut().unwrap().remove("ranges").unwrap();
+    scan["rangs"] = ranges;
+    let scan = write(&dir, "typo_scan.json", &scan.to_string());
+    assert_clear_error(
+        &eval(&good_odom, &scan, &[]),
+        "typo_scan.json",
+        "rangs: unknown field, did you mean `ranges`?",
+    );
+    // Fields left out still take their ROS defaults (orientation w = 1).
+    let partial = write(
+        &dir,
+        "partial.json",
+        r#"{"pose": {"pose": {"position": {"y": 0.2, "z": 1.0}}}}"#,
+    );
+    let out = json_of(&eval(&partial, &good_scan, &["--format", "json"]));
+    assert_eq!(out["valid"], true, "{out}");
+}
+
+#[test]
 fn endless_special_and_oversized_input_files_are_refused_naming_them() {
     // A regression: /dev/zero as any input was once read until memory ran out, a FIFO blocked
     // forever. Each is refused in one line naming the path and what it is.

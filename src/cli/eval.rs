@@ -5,13 +5,13 @@ use std::path::{Path, PathBuf};
 use nalgebra::Vector3;
 use serde::de::DeserializeOwned;
 use serde::Serialize;
-use serde_json::Value;
 
 use cstep::config::{Settings, DEFAULT_NODE_NAME};
 use cstep::estimator::Estimator;
 use cstep::ros::convert::{
     empowerment_message, goal_position, laser_scan_to_scan, odometry_to_state, InputError,
 };
+use cstep::ros::json::{from_json, JsonError};
 use cstep::ros::messages::{Empowerment, Header, LaserScan, Odometry, Point};
 use cstep::scoring::{score, Score};
 
@@ -65,26 +65,13 @@ pub enum EvalError {
         /// Why.
         source: std::io::Error,
     },
-    /// A message file is not JSON, or not the message's fields.
+    /// A message file is not JSON, or not the message's fields (a misspelt field included).
     #[error("{}: not a valid message: {source}", path.display())]
     NotMessage {
         /// The file.
         path: PathBuf,
-        /// serde_json's reason.
-        source: serde_json::Error,
-    },
-    /// A message file holds JSON other than an object (serde would read an array as the
-    /// message's fields in order, and `[]` as the default message).
-    #[error(
-        "{}: not a valid message: expected a JSON object, got {kind} (the message's fields by \
-         their ROS names)",
-        path.display()
-    )]
-    NotObject {
-        /// The file.
-        path: PathBuf,
-        /// What it holds: "an array", "a number", ...
-        kind: &'static str,
+        /// Where and what: the field's path and what is wrong with it.
+        source: JsonError,
     },
     /// A message whose field cannot be used (the node would reject it alike).
     #[error("{}: {problem}", path.display())]
@@ -175,29 +162,18 @@ pub fn run(args: EvalArgs) -> Result<(), CliError> {
     Ok(())
 }
 
-/// The message in the JSON file at `path`: an object with the ROS field names. Anything else is
-/// refused — serde would read an array as the message's fields in order, and `[]` as the
-/// default message (a robot at rest at the origin).
+/// The message in the JSON file at `path`: an object with the ROS field names, read strictly
+/// ([`from_json`]): a misspelt field is refused with its path and the field meant, and anything
+/// but an object (serde would read an array as the message's fields in order, and `[]` as the
+/// default message, a robot at rest at the origin) is refused.
 fn read_json<T: DeserializeOwned>(path: &Path) -> Result<T, EvalError> {
     let text = cstep::input_file::read_to_string(path).map_err(|source| EvalError::Unreadable {
         path: path.to_owned(),
         source,
     })?;
-    let invalid = |source| EvalError::NotMessage {
+    from_json(&text).map_err(|source| EvalError::NotMessage {
         path: path.to_owned(),
         source,
-    };
-    let kind = match serde_json::from_str(&text).map_err(invalid)? {
-        Value::Object(_) => return serde_json::from_str(&text).map_err(invalid),
-        Value::Array(_) => "an array",
-        Value::String(_) => "a string",
-        Value::Number(_) => "a number",
-        Value::Bool(_) => "a boolean",
-        Value::Null => "null",
-    };
-    Err(EvalError::NotObject {
-        path: path.to_owned(),
-        kind,
     })
 }
 

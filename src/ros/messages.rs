@@ -1,8 +1,10 @@
 //! Serde mirrors of the ROS 2 messages cstep reads and writes.
 //!
 //! Field names and order follow the `.msg` definitions exactly: the same structs serve JSON
-//! (`cstep eval`, rosbridge-style) and CDR (the DDS wire format). Every field has a default so
-//! hand-written JSON may leave out what it does not need.
+//! (`cstep eval`, rosbridge-style, read by [`super::json`]) and CDR (the DDS wire format). Every
+//! field has its ROS default so hand-written JSON may leave out what it does not need, and every
+//! struct refuses a field it does not have (`deny_unknown_fields`), so a misspelt field is an
+//! error rather than silently its default. CDR carries no field names and is unaffected.
 
 use ros2_client::{MessageTypeName, ServiceTypeName};
 use serde::{Deserialize, Serialize};
@@ -10,7 +12,7 @@ use serde_big_array::BigArray;
 
 /// `builtin_interfaces/Time`.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, PartialOrd, Ord, Serialize, Deserialize)]
-#[serde(default)]
+#[serde(default, deny_unknown_fields)]
 pub struct Time {
     /// Seconds.
     pub sec: i32,
@@ -39,7 +41,7 @@ impl Time {
 
 /// `std_msgs/Header`.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
+#[serde(default, deny_unknown_fields)]
 pub struct Header {
     /// Acquisition time.
     pub stamp: Time,
@@ -49,7 +51,7 @@ pub struct Header {
 
 /// `geometry_msgs/Point`.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
+#[serde(default, deny_unknown_fields)]
 pub struct Point {
     /// x, metres.
     pub x: f64,
@@ -61,7 +63,7 @@ pub struct Point {
 
 /// `geometry_msgs/Vector3`.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
+#[serde(default, deny_unknown_fields)]
 pub struct Vector3 {
     /// x component.
     pub x: f64,
@@ -73,7 +75,7 @@ pub struct Vector3 {
 
 /// `geometry_msgs/Quaternion`; defaults to the identity (w = 1) as in ROS 2.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
+#[serde(default, deny_unknown_fields)]
 pub struct Quaternion {
     /// x component.
     pub x: f64,
@@ -98,7 +100,7 @@ impl Default for Quaternion {
 
 /// `geometry_msgs/Pose`.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
+#[serde(default, deny_unknown_fields)]
 pub struct Pose {
     /// Position.
     pub position: Point,
@@ -108,7 +110,7 @@ pub struct Pose {
 
 /// `geometry_msgs/PoseWithCovariance`.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
+#[serde(default, deny_unknown_fields)]
 pub struct PoseWithCovariance {
     /// The pose.
     pub pose: Pose,
@@ -119,7 +121,7 @@ pub struct PoseWithCovariance {
 
 /// `geometry_msgs/Twist`.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
+#[serde(default, deny_unknown_fields)]
 pub struct Twist {
     /// Linear velocity, m/s.
     pub linear: Vector3,
@@ -129,7 +131,7 @@ pub struct Twist {
 
 /// `geometry_msgs/TwistWithCovariance`.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
+#[serde(default, deny_unknown_fields)]
 pub struct TwistWithCovariance {
     /// The twist.
     pub twist: Twist,
@@ -158,7 +160,7 @@ impl Default for TwistWithCovariance {
 
 /// `nav_msgs/Odometry`: pose in `header.frame_id`, twist in `child_frame_id` (the body).
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
+#[serde(default, deny_unknown_fields)]
 pub struct Odometry {
     /// Stamp and parent frame.
     pub header: Header,
@@ -176,28 +178,28 @@ pub struct Odometry {
 /// for an angle or range limit that no `float32` holds (`1e300`, `1e-50`) is refused naming the
 /// field and the number as written, not narrowed to `inf` or 0 and reported as that.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
+#[serde(default, deny_unknown_fields)]
 pub struct LaserScan {
     /// Stamp of the first beam and the sensor frame.
     pub header: Header,
     /// Bearing of the first beam, radians.
-    #[serde(deserialize_with = "float32::angle_min")]
+    #[serde(deserialize_with = "float32::narrow")]
     pub angle_min: f32,
     /// Bearing of the last beam, radians.
-    #[serde(deserialize_with = "float32::angle_max")]
+    #[serde(deserialize_with = "float32::narrow")]
     pub angle_max: f32,
     /// Bearing step, radians.
-    #[serde(deserialize_with = "float32::angle_increment")]
+    #[serde(deserialize_with = "float32::narrow")]
     pub angle_increment: f32,
     /// Time between beams, seconds.
     pub time_increment: f32,
     /// Time between scans, seconds.
     pub scan_time: f32,
     /// Shortest measurable range, metres.
-    #[serde(deserialize_with = "float32::range_min")]
+    #[serde(deserialize_with = "float32::narrow")]
     pub range_min: f32,
     /// Longest measurable range, metres.
-    #[serde(deserialize_with = "float32::range_max")]
+    #[serde(deserialize_with = "float32::narrow")]
     pub range_max: f32,
     /// Ranges, metres (REP 117 for non-finite values).
     #[serde(deserialize_with = "lenient_floats::deserialize")]
@@ -209,6 +211,7 @@ pub struct LaserScan {
 
 /// `cstep_msgs/Empowerment`: the C-STEP score of one state.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct Empowerment {
     /// The scan's stamp and the odometry frame.
     pub header: Header,
@@ -236,6 +239,7 @@ pub struct Empowerment {
 
 /// `cstep_msgs/EmpoweredReward`: the reward an RL agent receives for one state.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct EmpoweredReward {
     /// The scan's stamp and the odometry frame.
     pub header: Header,
@@ -253,7 +257,7 @@ pub struct EmpoweredReward {
 
 /// `geometry_msgs/PoseStamped`: the optional goal input.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
+#[serde(default, deny_unknown_fields)]
 pub struct PoseStamped {
     /// Stamp and frame.
     pub header: Header,
@@ -263,7 +267,7 @@ pub struct PoseStamped {
 
 /// `cstep_msgs/srv/Evaluate` request: one state to score, synchronously.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
+#[serde(default, deny_unknown_fields)]
 pub struct EvaluateRequest {
     /// The robot's state.
     pub odom: Odometry,
@@ -277,6 +281,7 @@ pub struct EvaluateRequest {
 
 /// `cstep_msgs/srv/Evaluate` response.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct EvaluateResponse {
     /// The score.
     pub empowerment: Empowerment,
@@ -287,7 +292,7 @@ pub struct EvaluateResponse {
 /// `cstep_msgs/srv/EvaluateBatch` request: K states to score in one call, each as
 /// [`EvaluateRequest`] would score it alone.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
+#[serde(default, deny_unknown_fields)]
 pub struct EvaluateBatchRequest {
     /// The K robot states.
     pub odom: Vec<Odometry>,
@@ -303,6 +308,7 @@ pub struct EvaluateBatchRequest {
 
 /// `cstep_msgs/srv/EvaluateBatch` response: one score and reward per requested state.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct EvaluateBatchResponse {
     /// The scores, in request order.
     pub empowerment: Vec<Empowerment>,
@@ -312,6 +318,7 @@ pub struct EvaluateBatchResponse {
 
 /// `diagnostic_msgs/KeyValue`.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct KeyValue {
     /// Name of the value.
     pub key: String,
@@ -321,6 +328,7 @@ pub struct KeyValue {
 
 /// `diagnostic_msgs/DiagnosticStatus`.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct DiagnosticStatus {
     /// [`DiagnosticStatus::OK`], [`DiagnosticStatus::WARN`], [`DiagnosticStatus::ERROR`] or
     /// [`DiagnosticStatus::STALE`].
@@ -348,6 +356,7 @@ impl DiagnosticStatus {
 
 /// `diagnostic_msgs/DiagnosticArray`.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
 pub struct DiagnosticArray {
     /// Stamp.
     pub header: Header,
@@ -357,7 +366,7 @@ pub struct DiagnosticArray {
 
 /// `builtin_interfaces/Duration`.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(default)]
+#[serde(default, deny_unknown_fields)]
 pub struct Duration {
     /// Seconds.
     pub sec: i32,
@@ -382,7 +391,7 @@ impl Duration {
 
 /// `std_msgs/ColorRGBA`, each channel 0–1.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
+#[serde(default, deny_unknown_fields)]
 pub struct ColorRGBA {
     /// Red.
     pub r: f32,
@@ -396,7 +405,7 @@ pub struct ColorRGBA {
 
 /// `sensor_msgs/CompressedImage` (a marker's texture).
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
+#[serde(default, deny_unknown_fields)]
 pub struct CompressedImage {
     /// Acquisition time and frame.
     pub header: Header,
@@ -408,7 +417,7 @@ pub struct CompressedImage {
 
 /// `visualization_msgs/UVCoordinate`: a texture coordinate.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
+#[serde(default, deny_unknown_fields)]
 pub struct UVCoordinate {
     /// Horizontal texture coordinate.
     pub u: f32,
@@ -418,7 +427,7 @@ pub struct UVCoordinate {
 
 /// `visualization_msgs/MeshFile`: a mesh sent inline.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
+#[serde(default, deny_unknown_fields)]
 pub struct MeshFile {
     /// The file name, whose extension tells the format.
     pub filename: String,
@@ -429,7 +438,7 @@ pub struct MeshFile {
 /// `visualization_msgs/Marker` with every field of ROS 2 Humble and later, in `.msg` order
 /// (RViz cannot decode a marker without the texture and mesh-file fields).
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
+#[serde(default, deny_unknown_fields)]
 pub struct Marker {
     /// Stamp and the frame the pose and points are in.
     pub header: Header,
@@ -489,7 +498,7 @@ impl Marker {
 
 /// `visualization_msgs/MarkerArray`.
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
+#[serde(default, deny_unknown_fields)]
 pub struct MarkerArray {
     /// The markers, applied in order.
     pub markers: Vec<Marker>,
@@ -498,7 +507,7 @@ pub struct MarkerArray {
 /// `rosgraph_msgs/Clock`: the simulation time on `/clock` (ros2-client's own `/clock` reader
 /// expects `builtin_interfaces/Time`, a type rclcpp and rclpy never publish there).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
-#[serde(default)]
+#[serde(default, deny_unknown_fields)]
 pub struct Clock {
     /// The simulation time.
     pub clock: Time,
@@ -584,14 +593,14 @@ ros_services!(
 );
 
 /// Scalar `float32` fields that refuse, in JSON, a number no `float32` holds: a finite number
-/// beyond ±`f32::MAX` or a non-zero one that rounds to zero. One function per field, so that the
-/// error names it; binary formats (CDR) carry a `float32` already and pass through.
+/// beyond ±`f32::MAX` or a non-zero one that rounds to zero ([`super::json`] names the field);
+/// binary formats (CDR) carry a `float32` already and pass through.
 mod float32 {
     use serde::de::{Deserializer, Error};
     use serde::Deserialize;
 
-    /// The `f32` the JSON number for `field` is, or why it is none.
-    fn narrow<'de, D: Deserializer<'de>>(deserializer: D, field: &str) -> Result<f32, D::Error> {
+    /// The `f32` the JSON number is, or why it is none.
+    pub fn narrow<'de, D: Deserializer<'de>>(deserializer: D) -> Result<f32, D::Error> {
         if !deserializer.is_human_readable() {
             return f32::deserialize(deserializer);
         }
@@ -599,23 +608,13 @@ mod float32 {
         let narrow = wide as f32;
         if narrow.is_infinite() && wide.is_finite() || narrow == 0.0 && wide != 0.0 {
             return Err(D::Error::custom(format_args!(
-                "{field}: {wide:?} does not fit the message's float32 (magnitudes {:e} to {:e})",
+                "{wide:?} does not fit the message's float32 (magnitudes {:e} to {:e})",
                 f32::from_bits(1),
                 f32::MAX
             )));
         }
         Ok(narrow)
     }
-
-    macro_rules! fields {
-        ($($field:ident),*) => {$(
-            pub fn $field<'de, D: Deserializer<'de>>(deserializer: D) -> Result<f32, D::Error> {
-                narrow(deserializer, stringify!($field))
-            }
-        )*};
-    }
-
-    fields!(angle_min, angle_max, angle_increment, range_min, range_max);
 }
 
 /// Float arrays that read JSON's stand-ins for non-finite numbers and pass binary formats
@@ -680,56 +679,5 @@ mod lenient_floats {
                 _ => Err(E::invalid_value(de::Unexpected::Str(v), &self)),
             }
         }
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn scan_json_accepts_rosbridge_nulls_and_named_non_finite_values() {
-        let scan: LaserScan =
-            serde_json::from_str(r#"{"ranges":[1.5, null, "-inf", "nan", "inf", 2]}"#).unwrap();
-        assert_eq!(scan.ranges[0], 1.5);
-        assert_eq!(scan.ranges[1], f32::INFINITY);
-        assert_eq!(scan.ranges[2], f32::NEG_INFINITY);
-        assert!(scan.ranges[3].is_nan());
-        assert_eq!(scan.ranges[4], f32::INFINITY);
-        assert_eq!(scan.ranges[5], 2.0);
-        let err = serde_json::from_str::<LaserScan>(r#"{"ranges":["far"]}"#).unwrap_err();
-        assert!(err.to_string().contains("\"far\""), "{err}");
-    }
-
-    #[test]
-    fn scan_json_limits_beyond_float32_are_refused_as_given() {
-        // Issue 12, failure 9: 1e300 narrowed to inf and was reported as "got inf".
-        for (json, words) in [
-            (
-                r#"{"angle_increment": 1e300}"#,
-                "angle_increment: 1e300 does not fit the message's float32",
-            ),
-            (r#"{"range_max": -4e38}"#, "range_max: -4e38 does not fit"),
-            (r#"{"angle_min": 1e-50}"#, "angle_min: 1e-50 does not fit"),
-        ] {
-            let err = serde_json::from_str::<LaserScan>(json).unwrap_err();
-            assert!(err.to_string().contains(words), "{err}");
-        }
-        let scan: LaserScan =
-            serde_json::from_str(r#"{"angle_min": -3, "range_max": 3.4e38, "angle_max": 1e-45}"#)
-                .unwrap();
-        assert_eq!(scan.angle_min, -3.0);
-        assert_eq!(scan.range_max, 3.4e38);
-        assert_eq!(scan.angle_max, 1e-45);
-    }
-
-    #[test]
-    fn partial_odometry_json_fills_ros_defaults() {
-        let odom: Odometry =
-            serde_json::from_str(r#"{"pose":{"pose":{"position":{"x":1.0,"y":2.0}}}}"#).unwrap();
-        assert_eq!(odom.pose.pose.position.x, 1.0);
-        assert_eq!(odom.pose.pose.orientation.w, 1.0);
-        assert_eq!(odom.twist.twist.linear.x, 0.0);
-        assert_eq!(odom.pose.covariance.len(), 36);
     }
 }

@@ -2,13 +2,15 @@
 //!
 //! The core ([`crate::estimator`] and below) sees only [`crate::state::RobotState`] and
 //! [`crate::occupancy::Scan`]; this module reads `nav_msgs/Odometry` and
-//! `sensor_msgs/LaserScan` (as JSON for `cstep eval`, as CDR on the wire for the node),
+//! `sensor_msgs/LaserScan` (as JSON for `cstep eval`, strictly: [`json`]; as CDR on the wire
+//! for the node),
 //! validates them, and writes `cstep_msgs` results.
 
 pub mod args;
 pub mod context;
 pub mod convert;
 pub mod echo;
+pub mod json;
 pub mod logging;
 pub mod markers;
 pub mod messages;

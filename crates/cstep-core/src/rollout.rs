@@ -91,6 +91,11 @@ fn roll_out_block(
         Vec::new()
     };
     let mut hit = vec![0u8; n];
+    // Footprint disk centres, for models whose footprint turns with them.
+    let mut centres = match model.oriented_footprint() {
+        Some(_) => [vec![0f32; n], vec![0f32; n]],
+        None => [Vec::new(), Vec::new()],
+    };
     model.initial_state(start, &mut state);
 
     for k in 0..steps {
@@ -116,8 +121,7 @@ fn roll_out_block(
             }
         }
         if hit.contains(&0) {
-            let [x, y, z] = POSITION_COMPONENTS.map(|c| state.component(c));
-            occupancy.mark_collisions(x, y, z, &mut hit);
+            mark_collisions(model, &state, occupancy, &mut hit, &mut centres);
         }
     }
 
@@ -127,6 +131,29 @@ fn roll_out_block(
             .map(|i| [x[i] as f64, y[i] as f64, z[i] as f64])
             .collect(),
         terminal: hit.iter().map(|&h| h != 0).collect(),
+    }
+}
+
+/// Sets `hit` for every lane of `state` whose robot overlaps an obstacle: its position's disk,
+/// or each disk of the model's oriented footprint placed by the lane's heading (`centres` is
+/// scratch of one lane per lane for those).
+fn mark_collisions(
+    model: &dyn Dynamics,
+    state: &Batch,
+    occupancy: &Occupancy,
+    hit: &mut [u8],
+    centres: &mut [Vec<f32>; 2],
+) {
+    let [x, y, z] = POSITION_COMPONENTS.map(|c| state.component(c));
+    let Some((footprint, [cos, sin])) = model.oriented_footprint() else {
+        occupancy.mark_collisions(x, y, z, hit);
+        return;
+    };
+    let [cx, cy] = centres;
+    let pose = [x, y, state.component(cos), state.component(sin)];
+    for k in 0..footprint.centres().len() {
+        footprint.place(k, pose, cx, cy);
+        occupancy.mark_collisions(cx, cy, z, hit);
     }
 }
 

@@ -4,14 +4,21 @@
 //! the integration loop (RK4, batch as the inner loop); a model supplies the two pieces that
 //! differ between robots: [`Dynamics::actuate`] (controller and actuator limits, evaluated once
 //! per step and held over it) and [`Dynamics::derivative`] (the continuous-time equations of
-//! motion). Adding a robot means adding one file that implements this trait.
+//! motion). Adding a robot means adding one file that implements this trait: the quadrotor
+//! ([`quadrotor`], from a multirotor URDF read by [`urdf`]), the point mass ([`point_mass`]) and
+//! the differential drive ([`diff_drive`], from a wheeled URDF read by [`wheeled`], with a
+//! [`footprint`] of disks that turns with its heading).
 
 mod batch;
+pub mod diff_drive;
+pub mod footprint;
 pub mod point_mass;
 pub mod quadrotor;
 pub mod urdf;
+pub mod wheeled;
 
 pub use batch::Batch;
+pub use footprint::Footprint;
 
 use crate::state::RobotState;
 use crate::volume::VolumeDims;
@@ -111,4 +118,12 @@ pub trait Dynamics: Send + Sync + std::fmt::Debug {
 
     /// Height of the robot's collision shape, metres (used against floor and ceiling).
     fn collision_height(&self) -> f64;
+
+    /// The robot's footprint where one disk around its position would not do: disks of
+    /// [`Dynamics::collision_radius`] at body-frame centres ([`Footprint`]), and the state
+    /// components holding the cosine and sine of the heading that turn them into the rollout
+    /// frame. `None` (the default): one disk centred on the position, whatever the heading.
+    fn oriented_footprint(&self) -> Option<(&Footprint, [usize; 2])> {
+        None
+    }
 }

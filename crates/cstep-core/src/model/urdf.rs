@@ -79,6 +79,18 @@ pub enum UrdfError {
         /// The base link's name.
         link: String,
     },
+    /// A wheeled model was asked for, and the URDF has no wheels it can drive on.
+    #[error(
+        "{file}: no wheels found: looked for continuous or revolute joints turning about the \
+         robot's lateral (y) axis whose child link has a <collision> <cylinder> along that axis, \
+         at least one on the left (y > 0) and one on the right (y < 0); {found}"
+    )]
+    NoWheels {
+        /// The file or source name.
+        file: String,
+        /// What the search found instead, e.g. `found 1 wheel, none on the right`.
+        found: String,
+    },
 }
 
 /// A multirotor's physical description: what the dynamics model, the collision checks and the
@@ -139,29 +151,10 @@ impl RobotDescription {
     /// `"<inline>"`).
     pub fn from_str(xml: &str, source: &str) -> Result<Self, UrdfError> {
         let file = source.to_string();
-        let doc = roxmltree::Document::parse(xml).map_err(|e| UrdfError::Xml {
-            file: file.clone(),
-            message: e.to_string(),
-        })?;
+        let doc = document(xml, &file)?;
         let root = doc.root_element();
-        if root.tag_name().name() != "robot" {
-            return Err(UrdfError::Structure {
-                file,
-                message: format!(
-                    "the root element is <{}>, expected <robot>",
-                    root.tag_name().name()
-                ),
-            });
-        }
         let props = Properties::read(&root, &file)?;
-
-        let robot = urdf_rs::read_from_string(xml).map_err(|e| {
-            // urdf-rs messages name neither the element nor the value; find them ourselves.
-            diagnose(&root, &file).unwrap_or_else(|| UrdfError::Structure {
-                file: file.clone(),
-                message: e.to_string(),
-            })
-        })?;
+        let robot = parse_robot(xml, &root, &file)?;
         let base = base_link(&robot, &file)?;
 
         // urdf-rs fills in a zero inertial when the element is absent; the base link must have
@@ -262,6 +255,44 @@ impl RobotDescription {
     }
 }
 
+/// `xml` parsed as XML whose root element is `<robot>`, or the error naming what it is instead.
+pub(crate) fn document<'input>(
+    xml: &'input str,
+    file: &str,
+) -> Result<roxmltree::Document<'input>, UrdfError> {
+    let doc = roxmltree::Document::parse(xml).map_err(|e| UrdfError::Xml {
+        file: file.to_string(),
+        message: e.to_string(),
+    })?;
+    let root = doc.root_element();
+    if root.tag_name().name() != "robot" {
+        return Err(UrdfError::Structure {
+            file: file.to_string(),
+            message: format!(
+                "the root element is <{}>, expected <robot>",
+                root.tag_name().name()
+            ),
+        });
+    }
+    Ok(doc)
+}
+
+/// The links and joints of `xml` (whose parsed `root` is its `<robot>` element) as `urdf-rs`
+/// reads them; where `urdf-rs` refuses, the error names the element and value at fault.
+pub(crate) fn parse_robot(
+    xml: &str,
+    root: &roxmltree::Node,
+    file: &str,
+) -> Result<urdf_rs::Robot, UrdfError> {
+    urdf_rs::read_from_string(xml).map_err(|e| {
+        // urdf-rs messages name neither the element nor the value; find them ourselves.
+        diagnose(root, file).unwrap_or_else(|| UrdfError::Structure {
+            file: file.to_string(),
+            message: e.to_string(),
+        })
+    })
+}
+
 /// The coefficients of the `<properties>` element.
 struct Properties {
     arm: f64,
@@ -335,7 +366,7 @@ enum Requirement {
 }
 
 /// `value` if it is finite and positive, else an [`UrdfError::Invalid`] naming `field`.
-fn positive(value: f64, field: &str, file: &str) -> Result<f64, UrdfError> {
+pub(crate) fn positive(value: f64, field: &str, file: &str) -> Result<f64, UrdfError> {
     if value.is_finite() && value > 0.0 {
         Ok(value)
     } else {
@@ -349,7 +380,7 @@ fn positive(value: f64, field: &str, file: &str) -> Result<f64, UrdfError> {
 }
 
 /// `value` if it is finite and not negative, else an [`UrdfError::Invalid`] naming `field`.
-fn non_negative(value: f64, field: &str, file: &str) -> Result<f64, UrdfError> {
+pub(crate) fn non_negative(value: f64, field: &str, file: &str) -> Result<f64, UrdfError> {
     if value.is_finite() && value >= 0.0 {
         Ok(value)
     } else {
@@ -446,15 +477,18 @@ fn diagnose(root: &roxmltree::Node, file: &str) -> Option<UrdfError> {
 }
 
 /// The first child element of `node` named `tag`.
-fn element<'a, 'input>(
+pub(crate) fn element<'a, 'input>(
     node: &roxmltree::Node<'a, 'input>,
     tag: &str,
 ) -> Option<roxmltree::Node<'a, 'input>> {
     node.children().find(|c| c.has_tag_name(tag))
 }
 
-/// The one link that is no joint's child: the rigid body that flies.
-fn base_link<'a>(robot: &'a urdf_rs::Robot, file: &str) -> Result<&'a urdf_rs::Link, UrdfError> {
+/// The one link that is no joint's child: the rigid body that flies (or drives).
+pub(crate) fn base_link<'a>(
+    robot: &'a urdf_rs::Robot,
+    file: &str,
+) -> Result<&'a urdf_rs::Link, UrdfError> {
     let roots: Vec<&urdf_rs::Link> = robot
         .links
         .iter()

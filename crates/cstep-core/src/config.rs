@@ -25,6 +25,17 @@ pub const DEFAULT_NODE_NAME: &str = "cstep_node";
 /// The Crazyflie 2.x URDF, compiled in for the built-in defaults.
 pub const BUILTIN_URDF: &str = include_str!("../../../urdf/cf2x.urdf");
 
+/// The marker path `robot_description` takes for the compiled-in Clearpath Husky URDF.
+pub const BUILTIN_HUSKY_PATH: &str = "builtin:husky.urdf";
+
+/// The robots compiled in, by the `builtin:` name `robot_description` takes: the Crazyflie
+/// 2.x (the default) and the Clearpath Husky as pybullet ships it (`urdf/husky.urdf`), for
+/// `model: diff_drive` without a file at hand (`cstep bench`, tests).
+pub const BUILTIN_ROBOTS: [(&str, &str); 2] = [
+    (BUILTIN_URDF_PATH, BUILTIN_URDF),
+    (BUILTIN_HUSKY_PATH, include_str!("../../../urdf/husky.urdf")),
+];
+
 /// A parameter file or value that cannot be used, with where it came from.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[error("{source_name}: {message}")]
@@ -254,6 +265,8 @@ pub enum ModelKind {
     Quadrotor,
     /// The paper prototype's double integrator.
     PointMass,
+    /// The URDF-derived differential drive (or skid steer) on the ground.
+    DiffDrive,
 }
 
 impl ModelKind {
@@ -262,22 +275,27 @@ impl ModelKind {
         match self {
             ModelKind::Quadrotor => "quadrotor",
             ModelKind::PointMass => "point_mass",
+            ModelKind::DiffDrive => "diff_drive",
         }
     }
 
     /// Parses a configuration name.
     pub fn from_name(name: &str) -> Option<Self> {
-        [ModelKind::Quadrotor, ModelKind::PointMass]
-            .into_iter()
-            .find(|m| m.name() == name)
+        [
+            ModelKind::Quadrotor,
+            ModelKind::PointMass,
+            ModelKind::DiffDrive,
+        ]
+        .into_iter()
+        .find(|m| m.name() == name)
     }
 }
 
 /// Where the robot's URDF comes from.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum RobotSource {
-    /// The compiled-in Crazyflie 2.x.
-    Builtin,
+    /// A compiled-in robot, by its `builtin:` name ([`BUILTIN_ROBOTS`]).
+    Builtin(&'static str),
     /// A URDF file.
     File(PathBuf),
     /// URDF text given in the parameter itself, as ROS launch files pass `robot_description`
@@ -318,6 +336,10 @@ pub struct Settings {
     pub robot_radius: Option<f64>,
     /// Commanded acceleration bound override, m/s².
     pub max_acceleration: Option<f64>,
+    /// Each wheel rim's top speed where the wheel joints give no `<limit velocity>`, m/s.
+    pub wheel_max_speed: f64,
+    /// Each wheel rim's acceleration bound where the wheel joints give no `<limit effort>`, m/s².
+    pub wheel_max_acceleration: f64,
     /// Treatment of space the scan does not describe.
     pub unknown_space: UnknownSpace,
     /// Floor height (odometry frame), metres.
@@ -346,9 +368,11 @@ impl Settings {
     /// span parameters (the control sample's memory, the ceiling above the floor).
     pub fn from_parameters(p: &Parameters) -> Result<Self, ConfigError> {
         let robot_description = match p.text("robot_description") {
-            BUILTIN_URDF_PATH => RobotSource::Builtin,
             xml if is_urdf_text(xml) => RobotSource::Text(xml.to_owned()),
-            path => RobotSource::File(PathBuf::from(path)),
+            path => match BUILTIN_ROBOTS.iter().find(|(name, _)| *name == path) {
+                Some((name, _)) => RobotSource::Builtin(name),
+                None => RobotSource::File(PathBuf::from(path)),
+            },
         };
         let count = |name: &str| {
             usize::try_from(p.integer(name)).expect("the table bounds counts to 1..=100000")
@@ -364,6 +388,14 @@ impl Settings {
             volume_dims,
             [p.source("trajectories"), p.source("steps")],
         )?;
+        let model = p.choice("model", ModelKind::from_name);
+        if model == ModelKind::DiffDrive && volume_dims == VolumeDims::Three {
+            return Err(ConfigError::new(
+                &p.source("volume_dims"),
+                "'volume_dims' must be 2 with 'model' diff_drive: a ground robot's reachable \
+                 set is an area",
+            ));
+        }
         let floor_height = p.double("floor_height");
         let ceiling_height = p.double("ceiling_height");
         if let (Some(floor), Some(ceiling)) = (floor_height, ceiling_height) {
@@ -376,7 +408,7 @@ impl Settings {
         }
         Ok(Self {
             robot_description,
-            model: p.choice("model", ModelKind::from_name),
+            model,
             horizon: p.required_double("horizon"),
             trajectories,
             steps,
@@ -387,6 +419,8 @@ impl Settings {
             estimator: p.choice("estimator", EstimatorKind::from_name),
             robot_radius: p.double("robot_radius"),
             max_acceleration: p.double("max_acceleration"),
+            wheel_max_speed: p.required_double("wheel_max_speed"),
+            wheel_max_acceleration: p.required_double("wheel_max_acceleration"),
             unknown_space: p.choice("unknown_space", UnknownSpace::from_name),
             floor_height,
             ceiling_height,
@@ -524,7 +558,7 @@ mod tests {
         assert_eq!(s.model, ModelKind::Quadrotor);
         assert_eq!((s.horizon, s.trajectories, s.steps), (1.0, 150, 100));
         assert_eq!(s.volume_dims, VolumeDims::Two);
-        assert_eq!(s.robot_description, RobotSource::Builtin);
+        assert_eq!(s.robot_description, RobotSource::Builtin(BUILTIN_URDF_PATH));
         assert_eq!(s.robot_radius, None);
     }
 

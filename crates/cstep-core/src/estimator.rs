@@ -4,10 +4,14 @@
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
-use crate::config::{ModelKind, RobotSource, Settings, BUILTIN_URDF};
+use std::borrow::Cow;
+
+use crate::config::{ModelKind, RobotSource, Settings, BUILTIN_ROBOTS};
+use crate::model::diff_drive::DiffDrive;
 use crate::model::point_mass::PointMass;
 use crate::model::quadrotor::Quadrotor;
 use crate::model::urdf::{RobotDescription, UrdfError};
+use crate::model::wheeled::WheeledDescription;
 use crate::model::{CommandAxes, Dynamics};
 use crate::occupancy::{Occupancy, OccupancyOptions, Scan};
 use crate::rollout::{roll_out, Rollout};
@@ -126,14 +130,54 @@ pub struct Estimator {
     controls: Mutex<Option<(u64, Arc<Controls>)>>,
 }
 
-/// The robot description the configuration names (the built-in Crazyflie, a URDF file, or
-/// URDF text).
-pub fn robot_description(settings: &Settings) -> Result<RobotDescription, UrdfError> {
+/// The URDF text the configuration names (a built-in robot, a file, or the text itself) and
+/// the name messages give it.
+fn urdf_text(settings: &Settings) -> Result<(Cow<'_, str>, String), UrdfError> {
     match &settings.robot_description {
-        RobotSource::Builtin => RobotDescription::from_str(BUILTIN_URDF, "built-in cf2x.urdf"),
-        RobotSource::File(path) => RobotDescription::load(path),
-        RobotSource::Text(xml) => RobotDescription::from_str(xml, "robot_description (URDF text)"),
+        RobotSource::Builtin(name) => {
+            let text = BUILTIN_ROBOTS
+                .iter()
+                .find(|(builtin, _)| builtin == name)
+                .map(|(_, text)| *text)
+                .unwrap_or_else(|| unreachable!("the configuration accepts only built-in names"));
+            let short = name.trim_start_matches("builtin:");
+            Ok((Cow::Borrowed(text), format!("built-in {short}")))
+        }
+        RobotSource::File(path) => {
+            let file = path.display().to_string();
+            crate::input_file::read_to_string(path)
+                .map(|text| (Cow::Owned(text), file.clone()))
+                .map_err(|error| UrdfError::Io { file, error })
+        }
+        RobotSource::Text(xml) => Ok((
+            Cow::Borrowed(xml.as_str()),
+            "robot_description (URDF text)".to_owned(),
+        )),
     }
+}
+
+/// The multirotor description the configuration names (the quadrotor's and the point mass's).
+pub fn robot_description(settings: &Settings) -> Result<RobotDescription, UrdfError> {
+    let (xml, source) = urdf_text(settings)?;
+    RobotDescription::from_str(&xml, &source)
+}
+
+/// The wheeled robot's description the configuration names (the differential drive's).
+pub fn wheeled_description(settings: &Settings) -> Result<WheeledDescription, UrdfError> {
+    let (xml, source) = urdf_text(settings)?;
+    WheeledDescription::from_str(&xml, &source)
+}
+
+/// The `<robot name>` of the configured URDF, whichever model reads it: the hardware id the
+/// node's diagnostics report.
+pub fn robot_name(settings: &Settings) -> Result<String, UrdfError> {
+    let (xml, source) = urdf_text(settings)?;
+    let doc = crate::model::urdf::document(&xml, &source)?;
+    Ok(doc
+        .root_element()
+        .attribute("name")
+        .unwrap_or_default()
+        .to_owned())
 }
 
 impl Estimator {
@@ -148,17 +192,25 @@ impl Estimator {
 
     /// Builds the model the configuration names (loading its URDF) and the estimator around it.
     pub fn from_settings(settings: &Settings) -> Result<Self, UrdfError> {
-        let description = robot_description(settings)?;
         let model: Box<dyn Dynamics> = match settings.model {
-            ModelKind::Quadrotor => {
-                Box::new(Quadrotor::new(&description, settings.max_acceleration))
+            ModelKind::Quadrotor => Box::new(Quadrotor::new(
+                &robot_description(settings)?,
+                settings.max_acceleration,
+            )),
+            ModelKind::PointMass => {
+                let description = robot_description(settings)?;
+                Box::new(PointMass::new(
+                    settings
+                        .max_acceleration
+                        .unwrap_or(POINT_MASS_DEFAULT_ACCELERATION),
+                    description.collision_radius,
+                    description.collision_height,
+                ))
             }
-            ModelKind::PointMass => Box::new(PointMass::new(
-                settings
-                    .max_acceleration
-                    .unwrap_or(POINT_MASS_DEFAULT_ACCELERATION),
-                description.collision_radius,
-                description.collision_height,
+            ModelKind::DiffDrive => Box::new(DiffDrive::new(
+                &wheeled_description(settings)?,
+                settings.wheel_max_speed,
+                settings.wheel_max_acceleration,
             )),
         };
         let occupancy = OccupancyOptions {

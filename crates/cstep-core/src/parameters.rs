@@ -9,6 +9,8 @@
 
 use serde_norway::Value as Yaml;
 
+use crate::excerpt::excerpt;
+
 /// A parameter value, typed as ROS 2 types parameters.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Value {
@@ -145,19 +147,23 @@ pub const PARAMETERS: &[Parameter] = &[
         rule: Rule::Path,
         default: BUILTIN_URDF_PATH,
         unit: None,
-        description: "The robot: a URDF with a <properties> element (arm, kf, km, \
-            thrust2weight, ...), as a file path or as the URDF text itself (as launch files \
-            pass robot_description to robot_state_publisher). builtin:cf2x.urdf is the \
-            compiled-in Crazyflie 2.x, the file urdf/cf2x.urdf.",
+        description: "The robot: a URDF as a file path or as the URDF text itself (as launch \
+            files pass robot_description to robot_state_publisher). The quadrotor and the point \
+            mass read a multirotor URDF with a <properties> element (arm, kf, km, \
+            thrust2weight, ...); diff_drive reads a wheeled robot's URDF as its maker ships it. \
+            builtin:cf2x.urdf is the compiled-in Crazyflie 2.x (urdf/cf2x.urdf), \
+            builtin:husky.urdf the compiled-in Clearpath Husky (urdf/husky.urdf).",
         change: Change::ReadOnly,
     },
     Parameter {
         name: "model",
-        rule: Rule::Choice(&["quadrotor", "point_mass"]),
+        rule: Rule::Choice(&["quadrotor", "point_mass", "diff_drive"]),
         default: "quadrotor",
         unit: None,
-        description: "Dynamics: quadrotor (6-DoF rigid body, motors, attitude controller) or \
-            point_mass (the paper prototype's double integrator).",
+        description: "Dynamics: quadrotor (6-DoF rigid body, motors, attitude controller), \
+            point_mass (the paper prototype's double integrator) or diff_drive (a differential \
+            drive or skid steer on the ground, wheels, mass and footprint from the URDF; \
+            volume_dims 2).",
         change: Change::ReadOnly,
     },
     Parameter {
@@ -252,7 +258,8 @@ pub const PARAMETERS: &[Parameter] = &[
         default: ".nan",
         unit: Some("m"),
         description: "Robot disk radius for collision checks; .nan: from the URDF's collision \
-            geometry (0.06 m for the Crazyflie).",
+            geometry (0.06 m for the Crazyflie; for diff_drive, the radius of each disk of the \
+            row that covers the chassis and wheels, 0.425 m for the Husky).",
         change: Change::ReadOnly,
     },
     Parameter {
@@ -265,7 +272,29 @@ pub const PARAMETERS: &[Parameter] = &[
             3 m LiDAR: at the Crazyflie's full authority (17.3 m/s², ±8 m) nearly every \
             trajectory leaves the sensed space and the score stops telling states apart. .nan: \
             the model's own bound (quadrotor: full authority from the URDF; point mass: the \
-            prototype's 10.41 = 9.81 + 0.6).",
+            prototype's 10.41 = 9.81 + 0.6). diff_drive reads wheel_max_acceleration instead.",
+        change: Change::ReadOnly,
+    },
+    Parameter {
+        name: "wheel_max_speed",
+        rule: Rule::Positive { optional: false },
+        default: "1.0",
+        unit: Some("m/s"),
+        description: "diff_drive: each wheel rim's top speed, so the top speed driving \
+            straight, where the wheel joints' <limit velocity> (rad/s, times the wheel radius) \
+            does not give it. 1.0: the Clearpath Husky's published maximum speed (Husky \
+            datasheet, clearpathrobotics.com).",
+        change: Change::ReadOnly,
+    },
+    Parameter {
+        name: "wheel_max_acceleration",
+        rule: Rule::Positive { optional: false },
+        default: "3.0",
+        unit: Some("m/s²"),
+        description: "diff_drive: the bound on each wheel rim's acceleration where the wheel \
+            joints' <limit effort> (N·m, against the mass and yaw inertia) does not give it. \
+            3.0: the linear acceleration limit Clearpath ships for the Husky's drive \
+            controller (husky_control/config/control.yaml, linear.x.max_acceleration).",
         change: Change::ReadOnly,
     },
     Parameter {
@@ -461,8 +490,9 @@ impl Parameter {
                     Ok(Some(Value::Text(text)))
                 } else {
                     Err(format!(
-                        "'{name}' must be one of {}, got \"{text}\"",
-                        words.join(" | ")
+                        "'{name}' must be one of {}, got \"{}\"",
+                        words.join(" | "),
+                        excerpt(&text)
                     ))
                 }
             }
@@ -471,7 +501,8 @@ impl Parameter {
                     .ok_or_else(|| format!("'{name}' must be a string, got {}", show(value)))?;
                 if text.is_empty() || text.contains(char::is_whitespace) {
                     return Err(format!(
-                        "'{name}' must be a ROS name without spaces, got \"{text}\""
+                        "'{name}' must be a ROS name without spaces, got \"{}\"",
+                        excerpt(&text)
                     ));
                 }
                 Ok(Some(Value::Text(text)))
@@ -500,15 +531,18 @@ fn text(value: &Yaml) -> Option<String> {
 }
 
 /// A value as it reads in a one-line error: scalars as YAML (`soon`, `true`), lists and maps in
-/// flow style (`[1,2]`), never the block YAML that would span lines.
+/// flow style (`[1,2]`), never the block YAML that would span lines; of a long value, its start
+/// and length ([`excerpt`]).
 pub fn show(value: &Yaml) -> String {
     let text = match value {
         Yaml::Sequence(_) | Yaml::Mapping(_) | Yaml::Tagged(_) => serde_json::to_string(value).ok(),
         _ => serde_norway::to_string(value).ok(),
     };
-    text.map(|s| s.trim().to_owned())
+    let line = text
+        .map(|s| s.trim().to_owned())
         .filter(|s| !s.contains('\n'))
-        .unwrap_or_else(|| format!("{value:?}"))
+        .unwrap_or_else(|| format!("{value:?}"));
+    excerpt(&line).into_owned()
 }
 
 #[cfg(test)]

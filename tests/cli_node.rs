@@ -48,3 +48,52 @@ fn a_parameters_file_that_never_ends_is_refused_at_start() {
     assert_refused(&node(&["--params-file", &fifo_arg]), "it is a FIFO");
     std::fs::remove_file(&fifo).unwrap();
 }
+
+#[test]
+fn remaps_that_put_two_of_its_ports_on_one_name_are_refused() {
+    // Issue 45, item 6: each of these was accepted without a word.
+    for (args, words) in [
+        (
+            "cstep/reward:=cstep/empowerment",
+            "topic /cstep/empowerment: the empowerment publisher (cstep_msgs/msg/Empowerment) \
+             and the reward publisher (cstep_msgs/msg/EmpoweredReward) both resolve to it (a \
+             topic carries one message type); give each its own name",
+        ),
+        (
+            "cstep/evaluate_batch:=cstep/evaluate",
+            "service /cstep/evaluate: the evaluate service (cstep_msgs/srv/Evaluate) and the \
+             evaluate_batch service (cstep_msgs/srv/EvaluateBatch) both resolve to it",
+        ),
+        (
+            "scan:=cstep/empowerment",
+            "topic /cstep/empowerment: the empowerment publisher (cstep_msgs/msg/Empowerment) \
+             and the scan subscription (sensor_msgs/msg/LaserScan) both resolve to it (the node \
+             would read its own output)",
+        ),
+        (
+            "odom:=/diagnostics",
+            "topic /diagnostics: the diagnostics publisher (diagnostic_msgs/msg/DiagnosticArray) \
+             and the odometry subscription (nav_msgs/msg/Odometry) both resolve to it (the node \
+             would read its own output)",
+        ),
+    ] {
+        assert_refused(&node(&["-r", args]), words);
+    }
+}
+
+#[test]
+fn a_name_longer_than_rcl_allows_is_refused_quoting_only_its_start() {
+    // Issue 45, item 6: a 60 000-character name was accepted (rcl refuses over 247).
+    let rule = format!("scan:={}", "a".repeat(60_000));
+    let out = node(&["-r", &rule]);
+    assert_refused(
+        &out,
+        "… (60001 characters)\" has 60001 characters, more than the 247 rcl allows in a topic \
+         or service name",
+    );
+    assert!(
+        out.stderr.len() < 400,
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}

@@ -14,7 +14,20 @@
 
 use std::path::PathBuf;
 
+use crate::excerpt::excerpt;
 use crate::param_overrides::ParamSource;
+
+/// The longest fully qualified topic or service name rcl accepts (rmw's
+/// `RMW_TOPIC_MAX_NAME_LENGTH`: 255 characters less 8 reserved for the DDS prefixes); rcl refuses
+/// a publisher, subscription or service on a longer one.
+pub const MAX_NAME_LENGTH: usize = 255 - 8;
+
+/// The longest node name rcl accepts (rmw's `RMW_NODE_NAME_MAX_NAME_LENGTH`).
+pub const MAX_NODE_NAME_LENGTH: usize = 255;
+
+/// The longest namespace rcl accepts (rmw's `RMW_NAMESPACE_MAX_LENGTH`: room left in a topic
+/// name for the shortest name under it, `/x`).
+pub const MAX_NAMESPACE_LENGTH: usize = MAX_NAME_LENGTH - 2;
 
 /// What `--ros-args … [--]` asked for.
 #[derive(Debug, Clone, Default, PartialEq)]
@@ -122,11 +135,11 @@ impl LogLevel {
 }
 
 /// Why a `--ros-args` command line cannot be read: one line each, in rcl's words where rcl has
-/// words for it.
+/// words for it, quoting at most an excerpt of what was given ([`excerpt`]).
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 pub enum ArgsError {
     /// An argument outside the `--ros-args` blocks (`cstep node` takes no others).
-    #[error("unexpected argument \"{0}\" (ROS arguments follow --ros-args)")]
+    #[error("unexpected argument \"{}\" (ROS arguments follow --ros-args)", excerpt(.0))]
     Unexpected(String),
     /// A flag at the end of the line, without its value.
     #[error("--ros-args: {flag} needs {what}")]
@@ -137,10 +150,14 @@ pub enum ArgsError {
         what: &'static str,
     },
     /// A flag rcl does not know (rclcpp and rclpy refuse it too).
-    #[error("--ros-args: unknown ROS argument \"{0}\"")]
+    #[error("--ros-args: unknown ROS argument \"{}\"", excerpt(.0))]
     UnknownFlag(String),
     /// A malformed `-p`, `-r` or `--log-level` value.
-    #[error("--ros-args: couldn't parse {}: '{flag} {value}': {reason}", reason.what())]
+    #[error(
+        "--ros-args: couldn't parse {}: '{flag} {}': {reason}",
+        reason.what(),
+        excerpt(value)
+    )]
     Rule {
         /// The flag, as written.
         flag: String,
@@ -161,16 +178,16 @@ pub enum RuleError {
     #[error("wildcards in parameter names are not implemented (nor in rcl)")]
     ParamWildcard,
     /// A `-p` parameter name that is not tokens joined by `.` or `/`.
-    #[error("invalid parameter name \"{0}\"")]
+    #[error("invalid parameter name \"{}\"", excerpt(.0))]
     ParamName(String),
     /// A `-r` rule without `:=`.
     #[error("expected [node:]from:=to")]
     RemapForm,
     /// `__node:=` something that is not a node name.
-    #[error("node name not remapped to invalid name \"{0}\"")]
+    #[error("node name not remapped to invalid name \"{}\"", excerpt(.0))]
     NodeName(String),
     /// `__ns:=` something that is not a fully qualified namespace.
-    #[error("namespace not remapped to a fully qualified name (found: \"{0}\")")]
+    #[error("namespace not remapped to a fully qualified name (found: \"{}\")", excerpt(.0))]
     Namespace(String),
     /// `*` or `**` in a remap rule, which cstep does not implement.
     #[error("wildcards ('*', '**') in a {0} are not implemented")]
@@ -179,7 +196,7 @@ pub enum RuleError {
     #[error("backreferences are not implemented")]
     Backreference,
     /// One side of a remap rule is not a topic or service name.
-    #[error("{side} \"{name}\": {reason}")]
+    #[error("{side} \"{}\": {reason}", excerpt(name))]
     Name {
         /// Which side.
         side: Side,
@@ -187,6 +204,16 @@ pub enum RuleError {
         name: String,
         /// What is wrong with it.
         reason: InvalidName,
+    },
+    /// A `__node` or `__ns` replacement longer than rcl allows.
+    #[error("the {what} has {length} characters, more than the {limit} rcl allows")]
+    TooLong {
+        /// "node name" or "namespace".
+        what: &'static str,
+        /// Its length.
+        length: usize,
+        /// rcl's limit ([`MAX_NODE_NAME_LENGTH`], [`MAX_NAMESPACE_LENGTH`]).
+        limit: usize,
     },
     /// A `--log-level` level that is not one of rcutils' six.
     #[error("not one of unset, debug, info, warn, error, fatal")]
@@ -208,7 +235,8 @@ impl RuleError {
             | RuleError::Namespace(_)
             | RuleError::RemapWildcard(_)
             | RuleError::Backreference
-            | RuleError::Name { .. } => "remap rule",
+            | RuleError::Name { .. }
+            | RuleError::TooLong { .. } => "remap rule",
             RuleError::LogLevel | RuleError::EmptyLoggerName => "log level",
         }
     }
@@ -239,7 +267,7 @@ pub enum InvalidName {
     #[error("empty name")]
     Empty,
     /// A part between `/` that is not a token (or a `{substitution}`).
-    #[error("\"{0}\" is not a name token (letters, digits, _)")]
+    #[error("\"{}\" is not a name token (letters, digits, _)", excerpt(.0))]
     Token(String),
 }
 
@@ -247,7 +275,11 @@ pub enum InvalidName {
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 pub enum NameError {
     /// The name does not expand to a valid name ([`expand`]).
-    #[error("\"{name}\" does not expand to a valid ROS name (got \"{expanded}\")")]
+    #[error(
+        "\"{}\" does not expand to a valid ROS name (got \"{}\")",
+        excerpt(name),
+        excerpt(expanded)
+    )]
     Expansion {
         /// The name, as written.
         name: String,
@@ -257,7 +289,11 @@ pub enum NameError {
     /// The replacement of the remap rule that matched the name does not expand to a valid
     /// name.
     #[error(
-        "remap rule {from}:={to}: \"{to}\" does not expand to a valid ROS name (got \"{expanded}\")"
+        "remap rule {}:={}: \"{}\" does not expand to a valid ROS name (got \"{}\")",
+        excerpt(from),
+        excerpt(to),
+        excerpt(to),
+        excerpt(expanded)
     )]
     Replacement {
         /// The rule's match, as written.
@@ -267,6 +303,14 @@ pub enum NameError {
         /// What the replacement expanded to.
         expanded: String,
     },
+    /// The name resolves (remapped or not) to one longer than rcl allows.
+    #[error(
+        "\"{}\" has {} characters, more than the {MAX_NAME_LENGTH} rcl allows in a topic or \
+         service name",
+        excerpt(.0),
+        .0.len()
+    )]
+    TooLong(String),
 }
 
 impl RosArgs {
@@ -404,7 +448,7 @@ impl RosArgs {
             if kind_matches && expand(from, node, namespace)? == expanded {
                 let replaced = substitute(to, node, namespace);
                 return if is_full_name(&replaced) {
-                    Ok(replaced)
+                    within_length(replaced)
                 } else {
                     Err(NameError::Replacement {
                         from: from.clone(),
@@ -477,6 +521,13 @@ fn parse_remap_rule(rule: &str) -> Result<RemapRule, RuleError> {
             if !is_token(to) || to.starts_with(|c: char| c.is_ascii_digit()) {
                 return Err(RuleError::NodeName(to.to_owned()));
             }
+            if to.len() > MAX_NODE_NAME_LENGTH {
+                return Err(RuleError::TooLong {
+                    what: "node name",
+                    length: to.len(),
+                    limit: MAX_NODE_NAME_LENGTH,
+                });
+            }
             Remap::NodeName(to.to_owned())
         }
         "__ns" => {
@@ -514,18 +565,25 @@ fn parse_remap_rule(rule: &str) -> Result<RemapRule, RuleError> {
     Ok(RemapRule { node, kind })
 }
 
-/// A namespace for `__ns`: fully qualified (`/`, or `/token/token…` without a trailing `/`).
+/// A namespace for `__ns`: fully qualified (`/`, or `/token/token…` without a trailing `/`), at
+/// most [`MAX_NAMESPACE_LENGTH`] characters.
 fn validate_namespace(ns: &str) -> Result<(), RuleError> {
     let valid = ns == "/"
         || (ns.starts_with('/')
             && ns[1..]
                 .split('/')
                 .all(|t| is_token(t) && !t.starts_with(|c: char| c.is_ascii_digit())));
-    if valid {
-        Ok(())
-    } else {
-        Err(RuleError::Namespace(ns.to_owned()))
+    if !valid {
+        return Err(RuleError::Namespace(ns.to_owned()));
     }
+    if ns.len() > MAX_NAMESPACE_LENGTH {
+        return Err(RuleError::TooLong {
+            what: "namespace",
+            length: ns.len(),
+            limit: MAX_NAMESPACE_LENGTH,
+        });
+    }
+    Ok(())
 }
 
 /// A topic or service name as written: optional `/` or `~/` (or just `~`), then tokens
@@ -552,16 +610,27 @@ fn check_name_syntax(name: &str) -> Result<(), InvalidName> {
 
 /// rcl's `rcl_expand_topic_name`: `~` is the node's private namespace (`/ns/node`), `{node}`,
 /// `{ns}` and `{namespace}` are substituted, a relative name is put in `namespace`; the result
-/// is a valid fully qualified name (`rmw_validate_full_topic_name`) or an error saying why.
+/// is a valid fully qualified name (`rmw_validate_full_topic_name`: its characters, then its
+/// length) or an error saying why.
 pub fn expand(name: &str, node: &str, namespace: &str) -> Result<String, NameError> {
     let expanded = substitute(name, node, namespace);
     if is_full_name(&expanded) {
-        Ok(expanded)
+        within_length(expanded)
     } else {
         Err(NameError::Expansion {
             name: name.to_owned(),
             expanded,
         })
+    }
+}
+
+/// A valid fully qualified name, unless it is longer than [`MAX_NAME_LENGTH`] (rmw checks the
+/// length last, after the characters).
+fn within_length(expanded: String) -> Result<String, NameError> {
+    if expanded.len() > MAX_NAME_LENGTH {
+        Err(NameError::TooLong(expanded))
+    } else {
+        Ok(expanded)
     }
 }
 
@@ -738,6 +807,61 @@ mod tests {
             resolve("cstep/reward", Service, "/drone1"),
             "/drone1/cstep/reward"
         );
+    }
+
+    #[test]
+    fn names_longer_than_rcl_allows_are_refused_quoting_only_an_excerpt() {
+        // Issue 45, item 6: a 60 000-character remap was accepted (rcl refuses a topic name over
+        // 247 characters, a node name over 255, a namespace over 245), and errors quoted values
+        // whole.
+        let long = "a".repeat(60_000);
+        let parsed = parse(&format!("--ros-args -r scan:={long}"));
+        let e = parsed
+            .resolve("scan", NameKind::Topic, "cstep_node", "/")
+            .unwrap_err();
+        assert_eq!(
+            e.to_string(),
+            format!(
+                "\"/{}… (60001 characters)\" has 60001 characters, more than the 247 rcl \
+                 allows in a topic or service name",
+                "a".repeat(79)
+            )
+        );
+        let longest = "a".repeat(MAX_NAME_LENGTH - 1);
+        let parsed = parse(&format!("--ros-args -r scan:={longest}"));
+        let resolved = parsed.resolve("scan", NameKind::Topic, "cstep_node", "/");
+        assert_eq!(resolved.unwrap().len(), MAX_NAME_LENGTH);
+        // The namespace counts: the same name under /ns is too long.
+        assert!(matches!(
+            expand(&longest, "cstep_node", "/ns"),
+            Err(NameError::TooLong(_))
+        ));
+        let node = |n: usize| format!("--ros-args -r __node:={}", "n".repeat(n));
+        parse(&node(MAX_NODE_NAME_LENGTH));
+        let e = error(&node(MAX_NODE_NAME_LENGTH + 1));
+        assert!(
+            e.ends_with("the node name has 256 characters, more than the 255 rcl allows"),
+            "{e}"
+        );
+        let ns = |n: usize| format!("--ros-args -r __ns:=/{}", "n".repeat(n - 1));
+        parse(&ns(MAX_NAMESPACE_LENGTH));
+        let e = error(&ns(MAX_NAMESPACE_LENGTH + 1));
+        assert!(
+            e.ends_with("the namespace has 246 characters, more than the 245 rcl allows"),
+            "{e}"
+        );
+        for line in [
+            format!("--ros-args -r __node:={long}"),
+            format!("--ros-args -r sc*n:={long}"),
+            format!("--ros-args -r scan:={long}/-"),
+            format!("--ros-args -p {long}-:=1"),
+            format!("--ros-args --{long}"),
+            long.clone(),
+        ] {
+            let e = error(&line);
+            assert!(e.chars().count() < 400, "{} characters: {e}", e.len());
+            assert!(e.contains("(60"), "says how long: {e}");
+        }
     }
 
     #[test]

@@ -15,6 +15,8 @@
 use serde::de::{self, DeserializeOwned, DeserializeSeed, MapAccess, SeqAccess, Visitor};
 use serde_json::{Map, Value};
 
+use crate::excerpt::excerpt;
+
 /// JSON text that is not the message asked for.
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 #[error("{}{message}", if path.is_empty() { String::new() } else { format!("{path}: ") })]
@@ -87,10 +89,11 @@ impl de::Error for Misfit {
     }
 }
 
-/// The path of `key` in the object at `path`.
+/// The path of `key` in the object at `path` (a long key by its start and length, [`excerpt`]).
 fn child(path: &str, key: &str) -> String {
+    let key = excerpt(key);
     if path.is_empty() {
-        key.to_owned()
+        key.into_owned()
     } else {
         format!("{path}.{key}")
     }
@@ -273,6 +276,15 @@ mod tests {
         assert_eq!(
             refusal::<Odometry>(r#"{"velocity": 1}"#),
             "velocity: unknown field (the fields here: header, child_frame_id, pose, twist)"
+        );
+        let long = "k".repeat(100_000);
+        assert_eq!(
+            refusal::<Odometry>(&format!(r#"{{"pose": {{"{long}": 1}}}}"#)),
+            format!(
+                "pose.{}… (100000 characters): unknown field (the fields here: pose, \
+                 covariance)",
+                "k".repeat(80)
+            )
         );
     }
 

@@ -525,6 +525,11 @@ pub trait RosMessage: ros2_client::Message {
     fn type_name() -> MessageTypeName {
         MessageTypeName::new(Self::PACKAGE, Self::NAME)
     }
+
+    /// The type as ROS tools print it (`nav_msgs/msg/Odometry`), for messages to the user.
+    fn ros_type() -> String {
+        format!("{}/msg/{}", Self::PACKAGE, Self::NAME)
+    }
 }
 
 /// A service cstep serves, with its ROS type name (`package/srv/Name`) given once.
@@ -541,6 +546,11 @@ pub trait RosService {
     /// The type name ros2-client creates servers and clients with.
     fn type_name() -> ServiceTypeName {
         ServiceTypeName::new(Self::PACKAGE, Self::NAME)
+    }
+
+    /// The type as ROS tools print it (`cstep_msgs/srv/Evaluate`), for messages to the user.
+    fn ros_type() -> String {
+        format!("{}/srv/{}", Self::PACKAGE, Self::NAME)
     }
 }
 

@@ -24,12 +24,14 @@
 //! [`parameters`] defines every parameter once (type, default, range, unit, description, live or
 //! read-only); [`config`] reads the node's `ros__parameters` YAML against it;
 //! [`input_file`] reads every file a user names, regular files of bounded size only; [`suggest`]
-//! names the known name a misspelt one most likely meant; [`arena`],
+//! names the known name a misspelt one most likely meant; [`excerpt`] quotes a
+//! long value in an error by its start and length; [`arena`],
 //! [`scene`] and [`plot`] are the demo's simulated world and its plot.
 
 pub mod arena;
 pub mod config;
 pub mod estimator;
+pub mod excerpt;
 pub mod input;
 pub mod input_file;
 pub mod model;

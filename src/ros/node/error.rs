@@ -2,6 +2,7 @@
 //! the user has always read it.
 
 use crate::config::ConfigError;
+use crate::excerpt::excerpt;
 use crate::model::urdf::UrdfError;
 use crate::param_overrides::OverridesError;
 use crate::ros::args::NameError;
@@ -41,6 +42,24 @@ pub enum NodeError {
     /// A topic or service name does not resolve (`--ros-args` remapping, namespace).
     #[error(transparent)]
     ResolveName(#[from] NameError),
+    /// Two of the node's topics, or its two services, resolve to one name.
+    #[error(
+        "{kind} {}: {first} and {second} both resolve to it ({why}); give each its own name \
+         (--ros-args -r, or the *_topic and *_service parameters)",
+        excerpt(name)
+    )]
+    SharedName {
+        /// "topic" or "service".
+        kind: &'static str,
+        /// The name they share.
+        name: String,
+        /// One of them, with its type ("the scan subscription (sensor_msgs/msg/LaserScan)").
+        first: String,
+        /// The other.
+        second: String,
+        /// Why that cannot work.
+        why: &'static str,
+    },
     /// A resolved topic name ros2-client does not accept.
     #[error("topic name \"{name}\": {reason}")]
     TopicName {

@@ -39,7 +39,7 @@ use super::context::context_from_env;
 use super::logging;
 use super::rivals::Claims;
 use crate::config::DEFAULT_NODE_NAME;
-use crate::estimator::{robot_name, Estimator};
+use crate::estimator::{robot_description, Estimator};
 
 use clock::NodeClock;
 use diagnostics::StatusIdentity;
@@ -62,11 +62,14 @@ pub fn run(config: &[PathBuf], ros_args: &RosArgs, stop: Arc<AtomicBool>) -> Res
     refuse_security(ros_args)?;
     let fqn = format!("{}/{node_name}", namespace.trim_end_matches('/'));
     let (settings, interface, parameters) = load_parameters(config, ros_args, &fqn)?;
+    // Before joining the domain: a name rcl would refuse, or two of the node's ports on one
+    // name, stops it with nothing yet on the network.
+    let names = Names::resolve(&interface, ros_args, &node_name, &namespace)?;
     let estimator = Estimator::from_settings(&settings)?;
     let status = StatusIdentity {
         // diagnostic_updater's convention: "<node's fully qualified name>: <task>".
         name: format!("{fqn}: empowerment"),
-        hardware_id: robot_name(&settings)?,
+        hardware_id: robot_description(&settings)?.name,
     };
     let shared = Arc::new(Shared::new(
         estimator,
@@ -87,7 +90,6 @@ pub fn run(config: &[PathBuf], ros_args: &RosArgs, stop: Arc<AtomicBool>) -> Res
         )
         .map_err(|e| NodeError::CreateNode(format!("{e:?}")))?;
     rosout.attach(node.logging_handle());
-    let names = Names::resolve(&interface, ros_args, &node_name, &namespace)?;
     let ports = Ports::open(&mut node, &names)?;
     let guard = Guard {
         claims: Claims::new()

@@ -46,7 +46,7 @@ impl Names {
         };
         let topic = |name: &str| resolve(name, NameKind::Topic);
         let service = |name: &str| resolve(name, NameKind::Service);
-        Ok(Self {
+        let names = Self {
             odom: topic(&interface.odom_topic)?,
             scan: topic(&interface.scan_topic)?,
             goal: topic(&interface.goal_topic)?,
@@ -57,7 +57,80 @@ impl Names {
             clock: topic("/clock")?,
             evaluate: service(&interface.evaluate_service)?,
             evaluate_batch: service(&interface.evaluate_batch_service)?,
-        })
+        };
+        names.check_distinct()?;
+        Ok(names)
+    }
+
+    /// Refuses two of the node's topics, or its two services, on one name (rcl allows it, but
+    /// it never works): each of the node's topics has a type of its own, so two of them on one
+    /// topic never both match a peer, and an input on one of the node's outputs would read its
+    /// own scores. Outputs are listed first, so an input remapped onto an output is named
+    /// second.
+    fn check_distinct(&self) -> Result<(), NodeError> {
+        let topics = [
+            Port::output::<Empowerment>(&self.empowerment, "empowerment"),
+            Port::output::<EmpoweredReward>(&self.reward, "reward"),
+            Port::output::<MarkerArray>(&self.markers, "markers"),
+            Port::output::<DiagnosticArray>(&self.diagnostics, "diagnostics"),
+            Port::input::<Odometry>(&self.odom, "odometry"),
+            Port::input::<LaserScan>(&self.scan, "scan"),
+            Port::input::<PoseStamped>(&self.goal, "goal"),
+            Port::input::<Clock>(&self.clock, "clock"),
+        ];
+        for (i, first) in topics.iter().enumerate() {
+            if let Some(second) = topics[i + 1..].iter().find(|p| p.name == first.name) {
+                return Err(NodeError::SharedName {
+                    kind: "topic",
+                    name: first.name.to_owned(),
+                    first: first.what.clone(),
+                    second: second.what.clone(),
+                    why: if first.output == second.output {
+                        "a topic carries one message type"
+                    } else {
+                        "the node would read its own output"
+                    },
+                });
+            }
+        }
+        if self.evaluate == self.evaluate_batch {
+            return Err(NodeError::SharedName {
+                kind: "service",
+                name: self.evaluate.clone(),
+                first: format!("the evaluate service ({})", Evaluate::ros_type()),
+                second: format!("the evaluate_batch service ({})", EvaluateBatch::ros_type()),
+                why: "a service has one type, and its requests would go to either",
+            });
+        }
+        Ok(())
+    }
+}
+
+/// One of the node's topics, for [`Names::check_distinct`]: its resolved name, what it is to
+/// the node (with its type), and whether the node publishes it.
+struct Port<'a> {
+    name: &'a str,
+    what: String,
+    output: bool,
+}
+
+impl<'a> Port<'a> {
+    /// The node publishes `M` on `name`.
+    fn output<M: RosMessage>(name: &'a str, role: &str) -> Self {
+        Self {
+            name,
+            what: format!("the {role} publisher ({})", M::ros_type()),
+            output: true,
+        }
+    }
+
+    /// The node subscribes to `M` on `name`.
+    fn input<M: RosMessage>(name: &'a str, role: &str) -> Self {
+        Self {
+            name,
+            what: format!("the {role} subscription ({})", M::ros_type()),
+            output: false,
+        }
     }
 }
 

@@ -1,0 +1,38 @@
+//! Quoting what a user gave in an error without echoing all of it: a 60 000-character name or a
+//! 15 MiB value once came back whole in a one-line error. [`excerpt`] keeps the first
+//! [`EXCERPT_CHARS`] characters and says how long the whole was.
+
+use std::borrow::Cow;
+
+/// The most characters of a value an error quotes.
+pub const EXCERPT_CHARS: usize = 80;
+
+/// `text` as an error quotes it: whole when it has at most [`EXCERPT_CHARS`] characters, else its
+/// first [`EXCERPT_CHARS`] followed by `… (N characters)`.
+pub fn excerpt(text: &str) -> Cow<'_, str> {
+    match text.char_indices().nth(EXCERPT_CHARS) {
+        None => Cow::Borrowed(text),
+        Some((end, _)) => Cow::Owned(format!(
+            "{}… ({} characters)",
+            &text[..end],
+            text.chars().count()
+        )),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn short_text_is_whole_and_long_text_its_start_and_length() {
+        assert_eq!(excerpt("scan"), "scan");
+        let at_limit = "a".repeat(EXCERPT_CHARS);
+        assert_eq!(excerpt(&at_limit), at_limit);
+        let long = format!("/{}", "é".repeat(60_000));
+        assert_eq!(
+            excerpt(&long),
+            format!("/{}… (60001 characters)", "é".repeat(EXCERPT_CHARS - 1))
+        );
+    }
+}

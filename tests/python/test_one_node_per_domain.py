@@ -65,6 +65,44 @@ def test_a_second_node_with_the_same_names_refuses_to_start(
     node.destroy_node()
 
 
+@pytest.mark.parametrize("gap_s", [1.0, 6.0])
+def test_the_node_already_serving_wins_a_start_up_race(
+    ros_domain, ros_context, executor, gap_s, tmp_path
+):
+    """Two nodes with the same names, the second started while the first is still inside its
+    start-up window. Before the nodes compared creation times, whichever saw the other first
+    quit: with a 6 s gap, the node already serving in one run of two."""
+    log = tmp_path / "first.log"
+    with log.open("w") as err:  # the node keeps its own copy of the descriptor
+        first = subprocess.Popen(
+            [str(cstep_binary()), "node", "--config", str(CONFIG)],
+            stdout=subprocess.DEVNULL,
+            stderr=err,
+        )
+    try:
+        time.sleep(gap_s)
+        second = subprocess.run(
+            [str(cstep_binary()), "node", "--config", str(CONFIG)],
+            check=False,
+            capture_output=True,
+            text=True,
+            timeout=60,
+        )
+        assert second.returncode == 1, second.stderr
+        assert f"another node is already answering on ROS_DOMAIN_ID {ros_domain}" in (second.stderr)
+        node = Node("cstep_race_client", context=ros_context)
+        executor.add_node(node)
+        client = node.create_client(Evaluate, "/cstep/evaluate")
+        wait_until(client.service_is_ready, "the first node's /cstep/evaluate", executor)
+        spin(executor, 2.0)  # the first node has seen the newcomer come and go by now
+        assert first.poll() is None, log.read_text()
+        assert evaluate(node, client, executor).empowerment.valid
+        node.destroy_node()
+    finally:
+        first.terminate()
+        first.wait(timeout=10)
+
+
 def test_a_node_says_so_while_another_serves_its_service(rig, start_peer):
     rig.spin_for(PAST_STARTUP_WINDOW_S)  # the node is the incumbent now
     assert rig.status().level != DiagnosticStatus.ERROR

@@ -2,9 +2,9 @@
 
 use std::time::Instant;
 
-use ros2_client::dds::rustdds::RTPSEntity;
+use ros2_client::dds::rustdds::{RTPSEntity, GUID};
 
-use crate::ros::rivals::{self, Claims, Verdict};
+use crate::ros::rivals::{self, Claims, Participant, Verdict};
 
 /// Watches DDS discovery for another participant answering under this node's names
 /// ([`crate::ros::rivals`]).
@@ -20,17 +20,32 @@ pub(super) struct Guard {
 impl Guard {
     /// The verdict on the writers discovery has reported so far.
     pub(super) fn check(&self) -> Verdict {
-        let own = format!("{:?}", self.participant.guid().prefix);
+        let own = participant(self.participant.guid());
         let writers = self.participant.discovered_writers();
         let rivals = self.claims.rivals(
             writers.iter().map(|w| {
                 (
                     w.publication_topic_data.topic_name.as_str(),
-                    format!("{:?}", w.writer_proxy.remote_writer_guid.prefix),
+                    participant(w.writer_proxy.remote_writer_guid),
                 )
             }),
             &own,
         );
-        rivals::verdict(&rivals, self.started.elapsed(), &self.node, self.domain)
+        rivals::verdict(
+            &rivals,
+            &own,
+            self.started.elapsed(),
+            &self.node,
+            self.domain,
+        )
+    }
+}
+
+/// The participant of an entity's GUID, with its creation time where the GUID's prefix carries
+/// one.
+fn participant(guid: GUID) -> Participant {
+    Participant {
+        id: format!("{:?}", guid.prefix),
+        created_ms: guid.prefix.creation_millis(),
     }
 }

@@ -41,11 +41,28 @@ impl GuidPrefix {
     bytes[0] = my_vendor_id_bytes[0];
     bytes[1] = my_vendor_id_bytes[1];
 
-    // TODO:
-    // We could add some other identifying stuff here also, like one of
-    // our IP addresses (but which one?)
+    // cstep patch: the creation time (Unix milliseconds, 48 bits big-endian) in bytes 2..8, so
+    // that peers can tell which of two participants is older from discovery data alone
+    // (`creation_millis`); bytes 8..12 stay random. See CSTEP_PATCH.md, section 5.
+    let millis = std::time::SystemTime::now()
+      .duration_since(std::time::UNIX_EPOCH)
+      .map_or(0, |d| d.as_millis() as u64);
+    bytes[2..8].copy_from_slice(&millis.to_be_bytes()[2..8]);
 
     Self { bytes }
+  }
+
+  /// cstep patch: when a participant whose prefix this is was created (Unix milliseconds), as
+  /// `random_for_this_participant` writes it — `None` for a prefix of another vendor. A prefix
+  /// of an unpatched RustDDS carries random bytes there: callers check the time is plausible.
+  pub fn creation_millis(&self) -> Option<u64> {
+    let vendor = crate::messages::vendor_id::VendorId::THIS_IMPLEMENTATION.as_bytes();
+    if self.bytes[0..2] != vendor {
+      return None;
+    }
+    let mut millis = [0u8; 8];
+    millis[2..8].copy_from_slice(&self.bytes[2..8]);
+    Some(u64::from_be_bytes(millis))
   }
 
   pub fn range(&self) -> impl RangeBounds<GUID> {
@@ -636,6 +653,25 @@ mod tests {
   use byteorder::BigEndian;
 
   use super::*;
+
+  #[test]
+  fn a_new_prefix_carries_its_creation_time() {
+    let now = || {
+      std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .unwrap()
+        .as_millis() as u64
+    };
+    let before = now();
+    let prefix = GuidPrefix::random_for_this_participant();
+    let after = now();
+    let created = prefix.creation_millis().expect("our own vendor's prefix");
+    assert!(before <= created && created <= after, "{before} {created} {after}");
+    // Two prefixes made in the same millisecond still differ (bytes 8..12 are random).
+    assert_ne!(prefix, GuidPrefix::random_for_this_participant());
+    // Another vendor's prefix says nothing.
+    assert_eq!(GuidPrefix::new(&[0x01, 0x0f, 1, 2, 3]).creation_millis(), None);
+  }
 
   #[test]
   fn serde_test() {

@@ -30,7 +30,7 @@ ROS_BUILD_ENV := $(VENV_ENV) \
 	AMENT_PREFIX_PATH=$(VENV_ABS) CMAKE_PREFIX_PATH=$(VENV_ABS) PATH=$(VENV_ABS)/bin:$$PATH
 
 .PHONY: test lint lint-rust lint-python test-rust test-python venv colcon bench bench-latency \
-	bench-steps bench-train bench-stale soak fuzz-cdr parameter-docs
+	bench-steps bench-train bench-stale soak fuzz-cdr fuzz-yaml parameter-docs
 
 test: lint test-rust test-python
 
@@ -70,6 +70,16 @@ CDR_FUZZ_SEED ?= 1
 fuzz-cdr:
 	CDR_FUZZ_INPUTS=$(CDR_FUZZ_INPUTS) CDR_FUZZ_SEED=$(CDR_FUZZ_SEED) \
 		$(CARGO) test --test cdr_fuzz -- --nocapture
+
+# The adversarial parameters files of tests/yaml_fuzz.rs at length: deep nesting, many sections
+# and parameters, aliases, long scalars and keys, directives, each up to the 16 MiB input cap,
+# each read or refused within 5 s. `make test` runs 24 cases; this runs YAML_FUZZ_CASES (about
+# 20 minutes on one core) in the test profile, which `make test` has built already.
+YAML_FUZZ_CASES ?= 2000
+YAML_FUZZ_SEED ?= 1
+fuzz-yaml:
+	YAML_FUZZ_CASES=$(YAML_FUZZ_CASES) YAML_FUZZ_SEED=$(YAML_FUZZ_SEED) \
+		$(CARGO) test --test yaml_fuzz -- --nocapture
 
 # The virtual environment with rclpy, cstep_msgs, cstep_bridge and the cstep_scoring extension,
 # ready to import.

@@ -11,6 +11,7 @@ use std::path::{Path, PathBuf};
 
 use serde_norway::Value;
 
+use crate::excerpt::excerpt;
 use crate::model::CommandAxes;
 use crate::occupancy::UnknownSpace;
 use crate::param_overrides::{OverridesError, ParamOverrides};
@@ -110,11 +111,17 @@ impl ParameterSet {
         let (name, value) = assignment.split_once(":=").ok_or_else(|| {
             ConfigError::new(
                 source,
-                format!("'{assignment}' is not a parameter assignment of the form name:=value"),
+                format!(
+                    "'{}' is not a parameter assignment of the form name:=value",
+                    excerpt(assignment)
+                ),
             )
         })?;
-        let value: Value = serde_norway::from_str(value).map_err(|e| {
-            ConfigError::new(source, format!("cannot read the value of '{name}': {e}"))
+        let value = crate::yaml_input::from_str(value).map_err(|e| {
+            ConfigError::new(
+                source,
+                format!("cannot read the value of '{}': {e}", excerpt(name)),
+            )
         })?;
         self.values
             .insert(name.trim().to_owned(), (value, source.to_owned()));
@@ -155,7 +162,11 @@ impl ParameterSet {
                 let known: Vec<&str> = PARAMETERS.iter().map(|p| p.name).collect();
                 Err(ConfigError::new(
                     &source,
-                    format!("unknown parameter '{name}' (known: {})", known.join(", ")),
+                    format!(
+                        "unknown parameter '{}' (known: {})",
+                        excerpt(&name),
+                        known.join(", ")
+                    ),
                 ))
             }
         }
@@ -445,14 +456,21 @@ fn within_budget(
     let mut sources = sources.to_vec();
     sources.dedup();
     let mib = |b: u64| b as f64 / f64::from(1 << 20);
+    // As few decimals as tell the need from the budget: 100 000 × 336 needs 256.3 MiB, which
+    // whole MiB print as the budget's own 256. Seven resolve a byte, less than any excess.
+    let (need, budget) = (0..=7)
+        .map(|decimals| {
+            let show = |b| format!("{:.*}", decimals, mib(b));
+            (show(bytes), show(CONTROL_SAMPLE_BUDGET_BYTES))
+        })
+        .find(|(need, budget)| need != budget)
+        .expect("seven decimals of a MiB tell apart any two byte counts");
     Err(ConfigError::new(
         &sources.join(" and "),
         format!(
             "'trajectories' × 'steps' ({trajectories} × {steps}, {} command axes) needs \
-             {:.0} MiB of control samples, more than the {:.0} MiB an evaluation may allocate",
+             {need} MiB of control samples, more than the {budget} MiB an evaluation may allocate",
             axes.count(),
-            mib(bytes),
-            mib(CONTROL_SAMPLE_BUDGET_BYTES),
         ),
     ))
 }
@@ -682,10 +700,50 @@ mod tests {
         // At the budget (2 axes × 4 bytes × 100 000 × 335 ≤ 256 MiB) it loads; one step more
         // does not, and 3D commands take a third more.
         assert!(Settings::load(None, DEFAULT_NODE_NAME, &overrides(100_000, 335, 2)).is_ok());
+        // Just past the budget, the need is printed finely enough to differ from it.
         let err = Settings::load(None, DEFAULT_NODE_NAME, &overrides(100_000, 336, 2));
-        assert!(err.unwrap_err().to_string().starts_with("command line: "));
+        assert_eq!(
+            err.unwrap_err().to_string(),
+            "command line: 'trajectories' × 'steps' (100000 × 336, 2 command axes) needs 256.3 \
+             MiB of control samples, more than the 256.0 MiB an evaluation may allocate"
+        );
         assert!(Settings::load(None, DEFAULT_NODE_NAME, &overrides(100_000, 223, 3)).is_ok());
         assert!(Settings::load(None, DEFAULT_NODE_NAME, &overrides(100_000, 224, 3)).is_err());
+    }
+
+    #[test]
+    fn errors_quote_a_long_value_or_name_by_its_start_and_length() {
+        // Issue 45: a 15 MiB string value gave a 15.7 MB error line, a 120 KB `-p` value a
+        // 120 KB line.
+        let dir = temp_dir("excerpt");
+        let long = "x".repeat(1 << 20);
+        let path = write(
+            &dir,
+            "long.yaml",
+            &format!("cstep_node:\n  ros__parameters:\n    sampler: \"{long}\"\n"),
+        );
+        let err = Settings::load(Some(&path), DEFAULT_NODE_NAME, &[]).unwrap_err();
+        assert_eq!(
+            err.message,
+            format!(
+                "'sampler' must be one of bang_bang | fourier | chebyshev, got \"{}… (1048576 \
+                 characters)\"",
+                "x".repeat(80)
+            )
+        );
+        let list = format!("[{}1]", "1,".repeat(60_000));
+        let cases = [
+            format!("horizon:={list}"),
+            format!("{}:=1", "y".repeat(120_000)),
+            "z".repeat(120_000),
+            format!("odom_topic:=\"a {}\"", "b".repeat(120_000)),
+        ];
+        for assignment in &cases {
+            let err = Settings::load(None, DEFAULT_NODE_NAME, std::slice::from_ref(assignment));
+            let text = err.unwrap_err().to_string();
+            assert!(text.len() < 600, "{} bytes: {:.200}", text.len(), text);
+            assert!(text.contains(" characters)"), "{text}");
+        }
     }
 
     #[test]

@@ -23,7 +23,8 @@
 //!
 //! [`parameters`] defines every parameter once (type, default, range, unit, description, live or
 //! read-only); [`config`] reads the node's `ros__parameters` YAML against it;
-//! [`input_file`] reads every file a user names, regular files of bounded size only; [`suggest`]
+//! [`input_file`] reads every file a user names, regular files of bounded size only, and
+//! [`yaml_input`] the YAML in them at a cost bounded by their size; [`suggest`]
 //! names the known name a misspelt one most likely meant; [`excerpt`] quotes a
 //! long value in an error by its start and length; [`arena`],
 //! [`scene`] and [`plot`] are the demo's simulated world and its plot.
@@ -47,3 +48,4 @@ pub mod scoring;
 pub mod state;
 pub mod suggest;
 pub mod volume;
+pub mod yaml_input;

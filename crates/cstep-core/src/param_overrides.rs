@@ -16,11 +16,14 @@
 //! rclpy in `tests/python/test_ros_args.py`). The node's `--ros-args` and `cstep eval --config`
 //! read parameters files through this one table, so a file means the same to both.
 
+use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
 use serde_norway::{Mapping, Value};
 
 use crate::config::flatten;
+use crate::excerpt::excerpt;
+use crate::yaml_input::{self, YamlError};
 
 /// Where parameter overrides come from, in command-line order.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -56,6 +59,9 @@ pub struct Override {
 #[derive(Debug, Clone, Default)]
 pub struct ParamOverrides {
     sections: Vec<(String, Vec<Override>)>,
+    /// Each section's place in `sections`, by key: a file of many sections is read in time
+    /// linear in its size, not in the square of its number of sections.
+    by_key: HashMap<String, usize>,
     /// Each file read, with the section keys it holds.
     files: Vec<(PathBuf, Vec<String>)>,
 }
@@ -79,27 +85,27 @@ pub enum OverridesError {
         /// What is wrong with it.
         problem: FileError,
     },
-    /// A `-p name:=value` value is not YAML.
-    #[error("command line: cannot read the value of '{name}': {reason}")]
+    /// A `-p name:=value` value is not YAML, or more than [`yaml_input`] reads.
+    #[error("command line: cannot read the value of '{}': {reason}", excerpt(.name))]
     BadValue {
         /// The parameter.
         name: String,
-        /// The YAML parser's reason.
-        reason: serde_norway::Error,
+        /// Why.
+        reason: YamlError,
     },
 }
 
 /// What is wrong with a parameters file's layout.
 #[derive(Debug, thiserror::Error)]
 pub enum FileError {
-    /// The text is not YAML.
-    #[error("not valid YAML: {0}")]
-    NotYaml(serde_norway::Error),
+    /// The text is not YAML, or more than [`yaml_input`] reads.
+    #[error("{0}")]
+    NotYaml(YamlError),
     /// The document is not a mapping.
     #[error("expected a mapping of node names to `ros__parameters`")]
     NotMapping,
     /// A key on the node-name levels is not a string (`key` as YAML debug-prints it).
-    #[error("node name {key} under '{prefix}' is not a string")]
+    #[error("node name {} under '{}' is not a string", excerpt(.key), excerpt(.prefix))]
     NodeNameNotString {
         /// The key.
         key: String,
@@ -110,10 +116,10 @@ pub enum FileError {
     #[error("`ros__parameters` must be under a node name")]
     ParametersWithoutNode,
     /// A node's `ros__parameters` is not a mapping (the node's key).
-    #[error("`{0}.ros__parameters` must be a mapping")]
+    #[error("`{}.ros__parameters` must be a mapping", excerpt(.0))]
     ParametersNotMapping(String),
     /// A node-name level that ends without `ros__parameters` (its key).
-    #[error("node '{0}' has no `ros__parameters` section")]
+    #[error("node '{}' has no `ros__parameters` section", excerpt(.0))]
     NoParameters(String),
 }
 
@@ -125,12 +131,11 @@ impl ParamOverrides {
             match source {
                 ParamSource::File(path) => table.read_file(path)?,
                 ParamSource::Assignment { node, name, value } => {
-                    let parsed: Value = serde_norway::from_str(value).map_err(|reason| {
-                        OverridesError::BadValue {
+                    let parsed =
+                        yaml_input::from_str(value).map_err(|reason| OverridesError::BadValue {
                             name: name.clone(),
                             reason,
-                        }
-                    })?;
+                        })?;
                     table.set(
                         node.as_deref().unwrap_or("/**"),
                         Override {
@@ -168,7 +173,7 @@ impl ParamOverrides {
     /// Adds a parameters file's sections (`path` names it and gives relative paths their base);
     /// returns their keys.
     fn add_file(&mut self, text: &str, path: &Path) -> Result<Vec<String>, FileError> {
-        let document: Value = serde_norway::from_str(text).map_err(FileError::NotYaml)?;
+        let document = yaml_input::from_str(text).map_err(FileError::NotYaml)?;
         let mut keys = Vec::new();
         match document {
             Value::Null => {} // an empty file, as rcl accepts it
@@ -228,20 +233,15 @@ impl ParamOverrides {
         Ok(())
     }
 
-    /// Sets one override in section `key`, which keeps its place if it exists.
+    /// Sets one override in section `key`, which keeps its place if it exists. A later value
+    /// for a name the section holds goes after the earlier one, which it overrides: the value
+    /// rcl gives, without searching the section for the name.
     fn set(&mut self, key: &str, entry: Override) {
-        let index = match self.sections.iter().position(|(k, _)| k == key) {
-            Some(index) => index,
-            None => {
-                self.sections.push((key.to_owned(), Vec::new()));
-                self.sections.len() - 1
-            }
-        };
-        let section = &mut self.sections[index].1;
-        match section.iter_mut().find(|o| o.name == entry.name) {
-            Some(existing) => *existing = entry,
-            None => section.push(entry),
-        }
+        let index = *self.by_key.entry(key.to_owned()).or_insert_with(|| {
+            self.sections.push((key.to_owned(), Vec::new()));
+            self.sections.len() - 1
+        });
+        self.sections[index].1.push(entry);
     }
 
     /// The overrides for the node `fqn` (its fully qualified name), in the order they apply
@@ -268,7 +268,7 @@ impl ParamOverrides {
                     if keys.is_empty() {
                         "none".to_owned()
                     } else {
-                        keys.join(", ")
+                        excerpt(&keys.join(", ")).into_owned()
                     }
                 )
             })
@@ -289,14 +289,26 @@ pub fn section_matches(key: &str, fqn: &str) -> bool {
     matches_tokens(&pattern, &name)
 }
 
-/// Token-wise match of a pattern (`*`: one token, `**`: any number, else literal).
+/// Token-wise match of a pattern (`*`: one token, `**`: any number, else literal), in time
+/// proportional to the product of their lengths however many `**` the pattern has: `matched[i]`
+/// says whether the pattern so far can end after the name's first `i` tokens.
 fn matches_tokens(pattern: &[&str], name: &[&str]) -> bool {
-    match pattern.split_first() {
-        None => name.is_empty(),
-        Some((&"**", rest)) => (0..=name.len()).any(|skip| matches_tokens(rest, &name[skip..])),
-        Some((&"*", rest)) => !name.is_empty() && matches_tokens(rest, &name[1..]),
-        Some((literal, rest)) => name.first() == Some(literal) && matches_tokens(rest, &name[1..]),
+    let mut matched = vec![false; name.len() + 1];
+    matched[0] = true;
+    for &token in pattern {
+        if token == "**" {
+            // Any number of tokens more: every position after a reachable one is reachable.
+            let first = matched.iter().position(|&m| m).unwrap_or(matched.len());
+            matched[first..].fill(true);
+        } else {
+            // One token more, if it matches: shift right, back to front.
+            for i in (1..matched.len()).rev() {
+                matched[i] = matched[i - 1] && (token == "*" || token == name[i - 1]);
+            }
+            matched[0] = false;
+        }
     }
+    matched[name.len()]
 }
 
 #[cfg(test)]
@@ -359,9 +371,39 @@ mod tests {
             ("drone1/cstep_node", "/drone1/cstep_node", true),
             ("/drone1/**", "/drone1/a/b", true),
             ("/drone2/cstep_node", "/drone1/cstep_node", false),
+            ("/**/a/**/b/**", "/x/a/y/b", true),
+            ("/**/a/**/b/**", "/x/b/y/a", false),
         ] {
             assert_eq!(section_matches(key, fqn), expected, "{key} vs {fqn}");
         }
+        // A key of many `**` is matched in time proportional to its length: tried one way of
+        // spreading the name's tokens over them after another, this took longer than a lifetime.
+        let stars = format!("{}/other", "/**".repeat(300));
+        assert!(!section_matches(&stars, "/a/b/c/d/e/f/cstep_node"));
+        assert!(section_matches(&format!("{stars}/**"), "/a/other/b"));
+    }
+
+    #[test]
+    fn a_file_of_many_sections_is_one_table_and_warns_in_one_short_line() {
+        // Issue 45: sections for other nodes were looked up one by one, so a file's cost grew
+        // with the square of their number (15 MiB: 470 s).
+        let sections: String = (0..15_000)
+            .map(|i| format!("/ns/node_{i}:\n  ros__parameters:\n    a: {i}\n"))
+            .collect();
+        let mut t = ParamOverrides::default();
+        let path = Path::new("/p/many.yaml");
+        let keys = t.add_file(&sections, path).unwrap();
+        t.files.push((path.to_path_buf(), keys));
+        assert_eq!(t.sections.len(), 15_000);
+        assert_eq!(values(&t, "/ns/node_14999"), pairs(&[("a", "14999")]));
+        let warnings = t.unmatched_files("/cstep_node");
+        assert_eq!(warnings.len(), 1);
+        assert!(warnings[0].len() < 300, "{}", warnings[0]);
+        assert!(
+            warnings[0].contains("/ns/node_0, /ns/node_1, "),
+            "{}",
+            warnings[0]
+        );
     }
 
     // The expectations below are what rclpy 7.1 (Jazzy) gives a node for the same files and

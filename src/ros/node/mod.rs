@@ -71,6 +71,11 @@ pub fn run(config: &[PathBuf], ros_args: &RosArgs, stop: Arc<AtomicBool>) -> Res
         name: format!("{fqn}: empowerment"),
         hardware_id: robot_description(&settings)?.name,
     };
+    // Ctrl-C or SIGTERM while the files were read: nothing to leave yet, so leave now.
+    if stop.load(Ordering::SeqCst) {
+        info!("cstep node stopped before joining the DDS domain");
+        return Ok(());
+    }
     let shared = Arc::new(Shared::new(
         estimator,
         settings.safety_coefficient,

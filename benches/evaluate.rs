@@ -2,7 +2,7 @@
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 
-use cstep::config::Settings;
+use cstep::config::{Settings, BUILTIN_HUSKY_PATH};
 use cstep::estimator::Estimator;
 use cstep::scene::benchmark_case;
 
@@ -13,11 +13,20 @@ fn evaluate(c: &mut Criterion) {
         .unwrap();
     let (state, scan) = benchmark_case();
     let mut group = c.benchmark_group("evaluate");
-    for (model, trajectories) in [("point_mass", 150), ("quadrotor", 150), ("quadrotor", 2000)] {
-        let overrides = vec![
+    let rows = [
+        ("point_mass", 150),
+        ("quadrotor", 150),
+        ("quadrotor", 2000),
+        ("diff_drive", 150),
+    ];
+    for (model, trajectories) in rows {
+        let mut overrides = vec![
             format!("model:={model}"),
             format!("trajectories:={trajectories}"),
         ];
+        if model == "diff_drive" {
+            overrides.push(format!("robot_description:={BUILTIN_HUSKY_PATH}"));
+        }
         let settings = Settings::load(None, "cstep_node", &overrides).unwrap();
         let estimator = Estimator::from_settings(&settings).unwrap();
         group.bench_with_input(BenchmarkId::new(model, trajectories), &estimator, |b, e| {

@@ -7,7 +7,7 @@ use std::time::{Duration, Instant};
 
 use serde::Serialize;
 
-use cstep::config::Settings;
+use cstep::config::{Settings, BUILTIN_HUSKY_PATH};
 use cstep::estimator::Estimator;
 
 use super::{CliError, Format};
@@ -18,7 +18,7 @@ pub struct BenchArgs {
     /// Output format.
     #[arg(long, value_enum, default_value = "text")]
     format: Format,
-    /// Model to measure (quadrotor | point_mass); default: the standard rows.
+    /// Model to measure (quadrotor | point_mass | diff_drive); default: the standard rows.
     #[arg(long)]
     model: Option<String>,
     /// Trajectories per evaluation.
@@ -60,6 +60,7 @@ pub fn run(args: BenchArgs) -> Result<(), CliError> {
                 ("point_mass".into(), 150, 100),
                 ("quadrotor".into(), 150, 100),
                 ("quadrotor".into(), 2000, 100),
+                ("diff_drive".into(), 150, 100),
             ]
         } else {
             vec![(
@@ -82,6 +83,10 @@ pub fn run(args: BenchArgs) -> Result<(), CliError> {
             format!("trajectories:={trajectories}"),
             format!("steps:={steps}"),
         ];
+        if model == "diff_drive" {
+            // The built-in Crazyflie has no wheels; `-p robot_description:=…` still wins.
+            overrides.push(format!("robot_description:={BUILTIN_HUSKY_PATH}"));
+        }
         overrides.extend(args.params.iter().cloned());
         let settings = Settings::load(None, "cstep_node", &overrides)?;
         let estimator = Estimator::from_settings(&settings)?;
@@ -111,7 +116,7 @@ pub fn run(args: BenchArgs) -> Result<(), CliError> {
                 );
             }
             println!(
-                "scene: 2.5 m corridor closed 2.5 m ahead, 360-beam scan, 1 m/s toward the wall; {} thread(s); {}",
+                "scene: 2.5 m corridor closed 2.5 m ahead, 360-beam scan, 1 m/s toward the wall (diff_drive: the built-in Husky); {} thread(s); {}",
                 args.threads,
                 if args.fresh_samples { "fresh control sample each evaluation" } else { "control sample reused per seed, as in the node" }
             );

@@ -8,6 +8,7 @@ use serde::Serialize;
 
 use cstep::config::{Settings, DEFAULT_NODE_NAME};
 use cstep::estimator::Estimator;
+use cstep::excerpt::excerpt;
 use cstep::ros::convert::{
     empowerment_message, goal_position, laser_scan_to_scan, odometry_to_state, InputError,
 };
@@ -82,7 +83,7 @@ pub enum EvalError {
         problem: InputError,
     },
     /// `--goal` is not two or three numbers; the text given.
-    #[error("--goal: expected two or three numbers X,Y[,Z], got \"{0}\"")]
+    #[error("--goal: expected two or three numbers X,Y[,Z], got \"{}\"", excerpt(.0))]
     GoalForm(String),
     /// `--goal` is not a position the node would accept.
     #[error("--goal: {0}")]

@@ -12,6 +12,8 @@ use std::net::{IpAddr, ToSocketAddrs};
 use ros2_client::dds::rustdds::{DiscoveryRange, DomainParticipantBuilder};
 use ros2_client::Context;
 
+use crate::excerpt::excerpt;
+
 /// `ROS_AUTOMATIC_DISCOVERY_RANGE`: how far automatic discovery reaches (rmw's
 /// `rmw_automatic_discovery_range_t`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -90,10 +92,10 @@ pub struct Discovery {
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 pub enum ContextError {
     /// `ROS_DOMAIN_ID` is not a domain rcl accepts; the value as set.
-    #[error("ROS_DOMAIN_ID must be 0–232, got \"{0}\"")]
+    #[error("ROS_DOMAIN_ID must be 0–232, got \"{}\"", excerpt(.0))]
     DomainId(String),
     /// A `ROS_STATIC_PEERS` entry names no IPv4 host.
-    #[error("ROS_STATIC_PEERS: cannot resolve \"{0}\"")]
+    #[error("ROS_STATIC_PEERS: cannot resolve \"{}\"", excerpt(.0))]
     StaticPeer(String),
     /// RustDDS could not join the domain.
     #[error("cannot join DDS domain {domain}: {reason}")]
@@ -404,6 +406,14 @@ mod tests {
                 .to_string();
             assert!(err.contains("ROS_DOMAIN_ID") && err.contains(bad), "{err}");
         }
+        // A long value is quoted by its start and length (issue 45).
+        let long = "9".repeat(120_000);
+        let err = Discovery::from_vars(vars(&[("ROS_DOMAIN_ID", &long)])).unwrap_err();
+        assert!(
+            err.to_string().ends_with("… (120000 characters)\""),
+            "{err}"
+        );
+        assert!(err.to_string().len() < 200, "{err}");
     }
 
     #[test]

@@ -26,6 +26,7 @@ use super::messages::{
     RosMessage,
 };
 use super::yaml::{self, to_yaml};
+use crate::excerpt::excerpt;
 
 /// How long to look for a publisher when neither `--type` nor the topic's name tells the type
 /// (discovery usually takes 1–2 s); `--timeout` shortens it.
@@ -52,7 +53,7 @@ pub enum EchoError {
     #[error("--count must be at least 1")]
     ZeroCount,
     /// The topic is not a valid ROS name.
-    #[error("topic name \"{topic}\" is not a valid ROS name ({reason})")]
+    #[error("topic name \"{}\" is not a valid ROS name ({reason})", excerpt(topic))]
     TopicName {
         /// The topic, as given.
         topic: String,
@@ -173,7 +174,7 @@ pub enum EchoError {
 #[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
 pub enum EchoTypeError {
     /// Not `pkg/msg/Name` or `pkg/Name`; the name as given.
-    #[error("message type \"{0}\" is not of the form pkg/msg/Name")]
+    #[error("message type \"{}\" is not of the form pkg/msg/Name", excerpt(.0))]
     Form(String),
     /// A type cstep does not mirror; its `pkg/msg/Name`.
     #[error("cstep echo cannot decode {0}: it knows {known}", known = EchoType::known_list())]
@@ -583,6 +584,16 @@ mod tests {
         assert_eq!(
             EchoType::parse("Odometry").unwrap_err().to_string(),
             "message type \"Odometry\" is not of the form pkg/msg/Name"
+        );
+        // A long argument is quoted by its start and length (issue 45).
+        assert_eq!(
+            EchoType::parse(&"T".repeat(120_000))
+                .unwrap_err()
+                .to_string(),
+            format!(
+                "message type \"{}… (120000 characters)\" is not of the form pkg/msg/Name",
+                "T".repeat(80)
+            )
         );
     }
 

@@ -12,6 +12,7 @@ use ros2_client::{NodeOptions, ParameterValue};
 use serde_norway::Value as Yaml;
 
 use crate::config::Parameters;
+use crate::excerpt::excerpt;
 use crate::parameters::{find, Change, Kind, Parameter, Rule, Value};
 
 /// `options` with every parameter declared at its value in `parameters`, described from the
@@ -45,7 +46,7 @@ pub fn declare(
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 enum SetError {
     /// The name is not one of [`crate::parameters::PARAMETERS`].
-    #[error("'{0}' is not a cstep parameter")]
+    #[error("'{}' is not a cstep parameter", excerpt(.0))]
     Unknown(String),
     /// An array or unset value, where every cstep parameter takes one value.
     #[error("'{name}' takes a single value, got {kind:?}")]

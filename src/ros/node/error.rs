@@ -61,7 +61,7 @@ pub enum NodeError {
         why: &'static str,
     },
     /// A resolved topic name ros2-client does not accept.
-    #[error("topic name \"{name}\": {reason}")]
+    #[error("topic name \"{}\": {reason}", excerpt(name))]
     TopicName {
         /// The topic name.
         name: String,
@@ -69,7 +69,7 @@ pub enum NodeError {
         reason: String,
     },
     /// A resolved service name ros2-client does not accept.
-    #[error("service name \"{name}\": {reason}")]
+    #[error("service name \"{}\": {reason}", excerpt(name))]
     ServiceName {
         /// The service name.
         name: String,

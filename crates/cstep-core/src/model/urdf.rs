@@ -11,6 +11,8 @@ use std::path::Path;
 
 use nalgebra::Vector3;
 
+use crate::excerpt::excerpt;
+
 /// Gravitational acceleration used for every derived quantity, m/s² (the value the Crazyflie
 /// constants in the facts sheet were derived with: hover 14 468 rpm, max 21 703 rpm).
 pub const GRAVITY: f64 = 9.8;
@@ -57,7 +59,7 @@ pub enum UrdfError {
         what: String,
     },
     /// A value is present but unusable (not a number, NaN, infinite or out of range).
-    #[error("{file}: {field} must be {requirement}, got \"{value}\"")]
+    #[error("{file}: {field} must be {requirement}, got \"{}\"", excerpt(value))]
     Invalid {
         /// The file or source name.
         file: String,

@@ -39,7 +39,7 @@ use super::context::context_from_env;
 use super::logging;
 use super::rivals::Claims;
 use crate::config::DEFAULT_NODE_NAME;
-use crate::estimator::{robot_description, Estimator};
+use crate::estimator::{robot_name, Estimator};
 
 use clock::NodeClock;
 use diagnostics::StatusIdentity;
@@ -69,7 +69,7 @@ pub fn run(config: &[PathBuf], ros_args: &RosArgs, stop: Arc<AtomicBool>) -> Res
     let status = StatusIdentity {
         // diagnostic_updater's convention: "<node's fully qualified name>: <task>".
         name: format!("{fqn}: empowerment"),
-        hardware_id: robot_description(&settings)?.name,
+        hardware_id: robot_name(&settings)?,
     };
     // Ctrl-C or SIGTERM while the files were read: nothing to leave yet, so leave now.
     if stop.load(Ordering::SeqCst) {

@@ -159,14 +159,15 @@ impl ParameterSet {
         match self.values.into_iter().next() {
             None => Ok(Parameters { values: checked }),
             Some((name, (_, source))) => {
-                let known: Vec<&str> = PARAMETERS.iter().map(|p| p.name).collect();
+                let known = PARAMETERS.iter().map(|p| p.name);
+                // A misspelling names the parameter meant; anything else lists them all.
+                let hint = match crate::suggest::nearest(&name, known.clone()) {
+                    Some(meant) => format!(", did you mean '{meant}'?"),
+                    None => format!(" (known: {})", known.collect::<Vec<_>>().join(", ")),
+                };
                 Err(ConfigError::new(
                     &source,
-                    format!(
-                        "unknown parameter '{}' (known: {})",
-                        excerpt(&name),
-                        known.join(", ")
-                    ),
+                    format!("unknown parameter '{}'{hint}", excerpt(&name)),
                 ))
             }
         }
@@ -764,7 +765,15 @@ mod tests {
                 "volume_dims: 4",
                 "'volume_dims' must be one of 2 | 3, got 4",
             ),
-            ("horizn: 1.0", "unknown parameter 'horizn'"),
+            // Issue 45, item 5: a misspelling names the parameter meant.
+            (
+                "horizn: 1.0",
+                "unknown parameter 'horizn', did you mean 'horizon'?",
+            ),
+            (
+                "colour: 1.0",
+                "unknown parameter 'colour' (known: robot_description, model, ",
+            ),
             // Issue 12, failure 9: NaN said "must be set (... a file or -p cleared it)", and a
             // list gave a three-line error.
             (

@@ -30,7 +30,7 @@ ROS_BUILD_ENV := $(VENV_ENV) \
 	AMENT_PREFIX_PATH=$(VENV_ABS) CMAKE_PREFIX_PATH=$(VENV_ABS) PATH=$(VENV_ABS)/bin:$$PATH
 
 .PHONY: test lint lint-rust lint-python test-rust test-python venv colcon bench bench-latency \
-	bench-steps bench-train bench-stale soak fuzz-cdr fuzz-yaml parameter-docs
+	bench-steps bench-train bench-stale bench-services soak fuzz-cdr fuzz-yaml parameter-docs
 
 test: lint test-rust test-python
 
@@ -168,6 +168,13 @@ bench-latency: $(MSGS_STAMP)
 bench-stale: $(MSGS_STAMP)
 	$(CARGO) build --release --quiet
 	$(VENV_ENV) CSTEP_BIN=$(abspath $(TARGET_DIR))/release/cstep $(VPY) benches/python/bench_stale.py $(BENCH_STALE_ARGS)
+
+# The services under real rclpy callers, against a trivial rclpy server of the same services: a
+# new client's first answer (median, worst) and pipelining clients' answered counts;
+# BENCH_SERVICES_ARGS adds options (--clients, --pipelined, --in-flight, --states, --server).
+bench-services: $(MSGS_STAMP)
+	$(CARGO) build --release --quiet
+	$(VENV_ENV) CSTEP_BIN=$(abspath $(TARGET_DIR))/release/cstep $(VPY) benches/python/bench_services.py $(BENCH_SERVICES_ARGS)
 
 # Soak: 1080-beam scans at 200 Hz for 10 minutes with a score subscriber; prints the node's RSS
 # over time, scored + skipped against sent, and latency p50/p99. SOAK_ARGS adds options

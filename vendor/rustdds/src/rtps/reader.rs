@@ -136,6 +136,9 @@ pub(crate) struct Reader {
   fragment_assemblers: BTreeMap<GUID, FragmentAssembler>,
   last_fragment_garbage_collect: Timestamp,
   matched_writers: BTreeMap<GUID, RtpsWriterProxy>,
+  // cstep patch: samples addressed to this reader by a user-defined writer that
+  // is not matched yet, held until it is (see `hold_early_sample`).
+  early_samples: BTreeMap<GUID, Vec<EarlySample>>,
   writer_match_count_total: i32, // total count, never decreases
 
   requested_deadline_missed_count: i32,
@@ -151,6 +154,22 @@ pub(crate) struct Reader {
 
   #[allow(dead_code)] // to avoid warning if no security feature
   security_plugins: Option<SecurityPluginsHandle>,
+}
+
+// cstep patch: a sample that arrives from a writer we have not matched yet
+// (its SEDP announcement is still on the way) is held this long, at most this
+// many per writer and in all, and delivered when the writer matches.
+const EARLY_SAMPLE_HOLD: Duration = Duration::from_secs(10);
+const EARLY_SAMPLES_PER_WRITER: usize = 64;
+const EARLY_SAMPLES_TOTAL: usize = 256;
+
+/// cstep patch: a DATA (or completed DATA_FRAG sample) received from a writer
+/// that was not matched yet. See [`Reader::hold_early_sample`].
+struct EarlySample {
+  received: Timestamp,
+  dds_data: DDSData,
+  write_options: WriteOptions,
+  writer_sn: SequenceNumber,
 }
 
 // If we are assembling a fragment, but it does not receive any updates
@@ -203,6 +222,7 @@ impl Reader {
       fragment_assemblers: BTreeMap::new(),
       last_fragment_garbage_collect: Timestamp::now(),
       matched_writers: BTreeMap::new(),
+      early_samples: BTreeMap::new(),
       writer_match_count_total: 0,
       requested_deadline_missed_count: 0,
       offered_incompatible_qos_count: 0,
@@ -416,6 +436,9 @@ impl Reader {
             self.topic_name, writer
           );
 
+          // cstep patch: deliver what this writer sent before we matched it.
+          self.deliver_early_samples(writer);
+
           // The writer may have matched us earlier and sent its HEARTBEAT before we
           // knew it, so that HEARTBEAT was discarded. Without a request the next
           // one comes only after the writer's heartbeat period, and a Reliable
@@ -430,6 +453,7 @@ impl Reader {
       }
       Some(bad_policy_id) => {
         // no QoS match.
+        self.early_samples.remove(&writer); // cstep patch: never to be delivered
         self.offered_incompatible_qos_count += 1;
         self.send_status_change(DataReaderStatus::RequestedIncompatibleQos {
           count: CountWithChange::new(self.offered_incompatible_qos_count, 1),
@@ -466,6 +490,7 @@ impl Reader {
   }
 
   pub fn remove_writer_proxy(&mut self, writer_guid: GUID) {
+    self.early_samples.remove(&writer_guid); // cstep patch
     if self.matched_writers.contains_key(&writer_guid) {
       self.matched_writers.remove(&writer_guid);
       self
@@ -753,6 +778,9 @@ impl Reader {
         // We just ignore the data in such a case
         // ... unless it is Discovery traffic.
         if writer_guid.entity_id.entity_kind.is_user_defined() {
+          // cstep patch: ... or it came from a writer that has matched us but
+          // whose SEDP announcement we have not processed yet (was: return).
+          self.hold_early_sample(writer_guid, writer_sn, dds_data, write_options);
           return;
         }
       }
@@ -773,6 +801,85 @@ impl Reader {
     self.seqnum_instant_map.insert(writer_sn, receive_timestamp);
 
     self.notify_cache_change();
+  }
+
+  /// cstep patch: holds a sample that a user-defined writer sent to this reader
+  /// before the reader matched that writer, to be delivered by
+  /// [`Self::deliver_early_samples`] when it does.
+  ///
+  /// A remote writer matches us when it processes our SEDP announcement, and
+  /// we match it when we process its own: the two happen independently, so its
+  /// first samples can arrive before we know it. A ROS 2 service client is the
+  /// typical case: it sends its request as soon as it has matched the server's
+  /// endpoints, and the request reaches the server a moment before the
+  /// client's publication does. Dropped (as unpatched), such a sample is sent
+  /// again only after the writer's next periodic HEARTBEAT and our NACK; Fast
+  /// DDS answers our preemptive ACKNACK by restarting its heartbeat timer, so
+  /// that took its whole period, 3 s by default, on every new rclpy client.
+  ///
+  /// Only samples addressed to this reader get here (a writer submessage with
+  /// an unknown reader id goes to readers that have matched its writer only).
+  /// Bounded: samples older than [`EARLY_SAMPLE_HOLD`] are dropped, and at most
+  /// [`EARLY_SAMPLES_PER_WRITER`] per writer and [`EARLY_SAMPLES_TOTAL`] in
+  /// all are held (a further one is dropped, as unpatched; reliable writers
+  /// repair it).
+  fn hold_early_sample(
+    &mut self,
+    writer_guid: GUID,
+    writer_sn: SequenceNumber,
+    dds_data: DDSData,
+    write_options: WriteOptions,
+  ) {
+    let now = Timestamp::now();
+    let expired_before = now - EARLY_SAMPLE_HOLD;
+    self.early_samples.retain(|_, held| {
+      held.retain(|s| s.received >= expired_before);
+      !held.is_empty()
+    });
+    let total: usize = self.early_samples.values().map(Vec::len).sum();
+    let held = self.early_samples.entry(writer_guid).or_default();
+    if total >= EARLY_SAMPLES_TOTAL || held.len() >= EARLY_SAMPLES_PER_WRITER {
+      debug!(
+        "Reader {:?} topic={:?}: early sample {writer_sn:?} from unmatched {writer_guid:?} \
+         dropped, {total} held",
+        self.my_guid, self.topic_name
+      );
+      return;
+    }
+    if held.iter().any(|s| s.writer_sn == writer_sn) {
+      return; // a repeat of one we hold
+    }
+    held.push(EarlySample {
+      received: now,
+      dds_data,
+      write_options,
+      writer_sn,
+    });
+  }
+
+  /// cstep patch: delivers the samples held for `writer` (now matched), in
+  /// sequence-number order, as if they had just arrived: stamped now, so a
+  /// best-effort reader's read pointer (a receive time) does not pass over them.
+  fn deliver_early_samples(&mut self, writer: GUID) {
+    let Some(mut held) = self.early_samples.remove(&writer) else {
+      return;
+    };
+    held.sort_by_key(|s| s.writer_sn);
+    debug!(
+      "Reader {:?} topic={:?}: delivering {} samples that {writer:?} sent before it matched",
+      self.my_guid,
+      self.topic_name,
+      held.len()
+    );
+    for s in held {
+      self.process_received_data(
+        s.dds_data,
+        Timestamp::now(),
+        s.write_options,
+        writer,
+        s.writer_sn,
+      );
+    }
   }
 
   fn data_to_dds_data(
@@ -1584,6 +1691,95 @@ mod tests {
     );
     // TODO: Should the other notification mechanisms (mio-0.8 & async) be also
     // checked?
+  }
+
+  // cstep patch: a sample that arrives before its writer is matched is held and
+  // delivered when the writer matches (unpatched it was dropped, and a Fast DDS
+  // writer sent it again only after its 3 s heartbeat period).
+  #[test]
+  fn a_sample_from_a_writer_not_matched_yet_is_delivered_when_it_matches() {
+    let dds_cache = Arc::new(RwLock::new(DDSCache::new()));
+    let topic_name = "test_name";
+    let qos_policy = QosPolicyBuilder::new()
+      .reliability(Reliability::Reliable {
+        max_blocking_time: crate::Duration::ZERO,
+      })
+      .build();
+    let topic_cache_handle = dds_cache.write().unwrap().add_new_topic(
+      topic_name.to_string(),
+      TypeDesc::new("test_type".to_string()),
+      &qos_policy,
+    );
+    let (notification_sender, notification_receiver) = crate::mio_source::notification_channel(100);
+    let (_notification_event_source, notification_event_sender) =
+      mio_source::make_poll_channel().unwrap();
+    let (status_sender, _status_receiver) = sync_status_channel::<DataReaderStatus>(4).unwrap();
+    let (participant_status_sender, _participant_status_receiver) =
+      sync_status_channel(16).unwrap();
+    let (_reader_command_sender, reader_command_receiver) =
+      wake_channel::<ReaderCommand>(10, &LoopWaker::new());
+    let reader_guid = GUID::dummy_test_guid(EntityKind::READER_NO_KEY_USER_DEFINED);
+    let mut reader = Reader::new(
+      ReaderIngredients {
+        guid: reader_guid,
+        notification_sender,
+        status_sender,
+        topic_name: topic_name.to_string(),
+        topic_cache_handle: topic_cache_handle.clone(),
+        like_stateless: false,
+        qos_policy: qos_policy.clone(),
+        data_reader_command_receiver: reader_command_receiver,
+        data_reader_waker: Arc::new(Mutex::new(None)),
+        poll_event_sender: notification_event_sender,
+        security_plugins: None,
+        discovery_notify: None,
+      },
+      Rc::new(UDPSender::new(0).unwrap()),
+      new_shared_timer(),
+      participant_status_sender,
+    );
+
+    let writer_guid = GUID::dummy_test_guid(EntityKind::WRITER_NO_KEY_USER_DEFINED);
+    let mr_state = MessageReceiverState {
+      source_guid_prefix: writer_guid.prefix,
+      ..Default::default()
+    };
+    let data = Data {
+      reader_id: reader_guid.entity_id,
+      writer_id: writer_guid.entity_id,
+      writer_sn: SequenceNumber::new(1),
+      // CDR_LE encapsulation header, then four payload bytes
+      serialized_payload: Some(bytes::Bytes::from_static(&[0, 1, 0, 0, 1, 2, 3, 4])),
+      ..Data::default()
+    };
+    let data_flags = BitFlags::<DATA_Flags>::from_flag(DATA_Flags::Data);
+
+    // The request arrives first ...
+    reader.handle_data_msg(data, data_flags, &mr_state);
+    assert!(
+      notification_receiver.try_recv().is_err(),
+      "delivered before the match"
+    );
+    let no_reads = BTreeMap::new();
+    let handed_out = |reader: &Reader| {
+      reader
+        .acquire_the_topic_cache_guard()
+        .get_changes_in_range_reliable(&no_reads)
+        .map(|(_, cc)| (cc.writer_guid, cc.sequence_number))
+        .collect::<Vec<_>>()
+    };
+    assert!(handed_out(&reader).is_empty());
+
+    // ... then the writer's SEDP announcement.
+    reader.matched_writer_add(writer_guid, EntityId::UNKNOWN, vec![], vec![], &qos_policy);
+    assert!(
+      notification_receiver.try_recv().is_ok(),
+      "the held sample was not delivered when its writer matched"
+    );
+    assert_eq!(
+      handed_out(&reader),
+      vec![(writer_guid, SequenceNumber::new(1))]
+    );
   }
 
   #[test]

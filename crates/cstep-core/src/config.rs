@@ -495,6 +495,10 @@ pub struct NodeSettings {
     pub evaluate_service: String,
     /// `cstep_msgs/srv/EvaluateBatch` service: K states per call, scored in parallel.
     pub evaluate_batch_service: String,
+    /// Requests of one client the services hold waiting at once.
+    pub service_queue_per_client: usize,
+    /// Requests the services hold waiting at once, all clients together.
+    pub service_queue_total: usize,
     /// Odometry older than this when a scan arrives is stale, seconds.
     pub input_timeout: f64,
     /// A scan stamped more than this many seconds before the newest one scored means that time
@@ -508,6 +512,8 @@ pub struct NodeSettings {
 impl NodeSettings {
     /// Reads this struct's parameters from the checked values.
     pub fn from_parameters(p: &Parameters) -> Self {
+        // The table's ranges start at 1, so every checked count converts.
+        let count = |n: i64| usize::try_from(n).unwrap_or(usize::MAX);
         let name = |key: &str| p.text(key).to_owned();
         Self {
             odom_topic: name("odom_topic"),
@@ -518,6 +524,8 @@ impl NodeSettings {
             markers_topic: name("markers_topic"),
             evaluate_service: name("evaluate_service"),
             evaluate_batch_service: name("evaluate_batch_service"),
+            service_queue_per_client: count(p.integer("service_queue_per_client")),
+            service_queue_total: count(p.integer("service_queue_total")),
             input_timeout: p.required_double("input_timeout"),
             time_jump_tolerance: p.required_double("time_jump_tolerance"),
             use_sim_time: p.flag("use_sim_time"),

@@ -390,6 +390,25 @@ pub const PARAMETERS: &[Parameter] = &[
         change: Change::ReadOnly,
     },
     Parameter {
+        name: "service_queue_per_client",
+        rule: Rule::Integer { min: 1, max: 4096 },
+        default: "16",
+        unit: Some("requests"),
+        description: "Requests of one client that the services hold waiting at once; they are \
+            served round-robin across clients. A request past this (or service_queue_total) is \
+            answered at once with valid false and the reason, never dropped.",
+        change: Change::ReadOnly,
+    },
+    Parameter {
+        name: "service_queue_total",
+        rule: Rule::Integer { min: 1, max: 65536 },
+        default: "128",
+        unit: Some("requests"),
+        description: "Requests the services hold waiting at once, all clients together: bounds \
+            the node's memory under any number of clients.",
+        change: Change::ReadOnly,
+    },
+    Parameter {
         name: "input_timeout",
         rule: Rule::Positive { optional: false },
         default: "0.5",

@@ -21,6 +21,7 @@ mod error;
 mod guard;
 mod params;
 mod ports;
+mod queue;
 mod scoring;
 mod service;
 mod shared;
@@ -76,13 +77,19 @@ pub fn run(config: &[PathBuf], ros_args: &RosArgs, stop: Arc<AtomicBool>) -> Res
         info!("cstep node stopped before joining the DDS domain");
         return Ok(());
     }
-    let shared = Arc::new(Shared::new(
-        estimator,
-        settings.safety_coefficient,
-        Duration::from_secs_f64(interface.input_timeout),
-        interface.time_jump_tolerance,
-        stop,
-    ));
+    let shared = Arc::new(
+        Shared::new(
+            estimator,
+            settings.safety_coefficient,
+            Duration::from_secs_f64(interface.input_timeout),
+            interface.time_jump_tolerance,
+            stop,
+        )
+        .with_request_limits(queue::Limits {
+            per_client: interface.service_queue_per_client,
+            total: interface.service_queue_total,
+        }),
+    );
 
     let context = context_from_env(true)?;
     let options =
@@ -130,6 +137,14 @@ pub fn run(config: &[PathBuf], ros_args: &RosArgs, stop: Arc<AtomicBool>) -> Res
         };
         std::thread::spawn(move || score_scans(&shared, &outputs))
     };
+    // The services' answers go from their worker to the DDS side through this channel; every
+    // one answers a request the queue holds, so its length is bounded by the queue's limits.
+    let (reply_sender, reply_receiver) = smol::channel::unbounded();
+    let service_worker = {
+        let shared = shared.clone();
+        let replies = reply_sender.clone();
+        std::thread::spawn(move || service::answer_queued(&shared, &replies))
+    };
     let executor = smol::LocalExecutor::new();
     executor
         .spawn(
@@ -139,10 +154,23 @@ pub fn run(config: &[PathBuf], ros_args: &RosArgs, stop: Arc<AtomicBool>) -> Res
         )
         .detach();
     let clock = NodeClock::default();
-    smol::block_on(executor.run(serve(&shared, &ports, &node, &guard, &status, &clock)));
+    smol::block_on(executor.run(serve(
+        &shared,
+        &ports,
+        &node,
+        &guard,
+        &status,
+        &clock,
+        (&reply_sender, &reply_receiver),
+    )));
     shared.stopping.store(true, Ordering::SeqCst);
     shared.arrived.notify_all();
+    shared.requests.wake();
+    drop(reply_receiver);
     worker.join().map_err(|_| NodeError::ScoringThread)?;
+    service_worker
+        .join()
+        .map_err(|_| NodeError::ScoringThread)?;
     if let Some(refusal) = shared.latest().refusal.take() {
         return Err(NodeError::Rival(refusal));
     }

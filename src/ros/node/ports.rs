@@ -159,6 +159,12 @@ impl Ports {
             .reliability_best_effort()
             .durability(Durability::Volatile)
             .history(History::KeepLast { depth: 5 });
+        // The services keep every request and every answer until it is taken or acknowledged
+        // (keep-all): a burst of requests must not overwrite older ones in the reader, nor a
+        // burst of answers drop unacknowledged ones from the writer before they were repaired.
+        // The node takes requests off the reader at once into its bounded queue
+        // (`super::queue`), so the reader holds only those not yet taken.
+        let service_qos = reliable.clone().history(History::KeepAll);
         let odom_topic = topic::<Odometry>(node, &names.odom, &sensor)?;
         let scan_topic = topic::<LaserScan>(node, &names.scan, &sensor)?;
         let goal_topic = topic::<PoseStamped>(node, &names.goal, &reliable)?;
@@ -202,8 +208,8 @@ impl Ports {
                     ServiceMapping::Enhanced,
                     &evaluate_name,
                     &evaluate_type,
-                    reliable.clone(),
-                    reliable.clone(),
+                    service_qos.clone(),
+                    service_qos.clone(),
                 )
                 .map_err(failed("the evaluate service"))?,
             evaluate_batch: node
@@ -211,8 +217,8 @@ impl Ports {
                     ServiceMapping::Enhanced,
                     &batch_name,
                     &batch_type,
-                    reliable.clone(),
-                    reliable,
+                    service_qos.clone(),
+                    service_qos,
                 )
                 .map_err(failed("the evaluate_batch service"))?,
         })

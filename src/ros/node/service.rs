@@ -1,7 +1,12 @@
 //! The `/cstep/evaluate` and `/cstep/evaluate_batch` services' answers.
 
-use rayon::prelude::*;
+use std::sync::atomic::Ordering;
+use std::time::Duration;
 
+use rayon::prelude::*;
+use ros2_client::RmwRequestId;
+
+use super::queue::Full;
 use super::scoring::Query;
 use super::shared::Shared;
 use crate::ros::convert::{empowerment_message, reward_message};
@@ -10,6 +15,86 @@ use crate::ros::messages::{
     EvaluateResponse, Header,
 };
 use crate::scoring::{unscorable, Score};
+
+/// A request waiting for the service worker: which service's, and the id to answer it under.
+pub(super) enum Job {
+    /// A `/cstep/evaluate` request.
+    Evaluate(RmwRequestId, EvaluateRequest),
+    /// A `/cstep/evaluate_batch` request.
+    Batch(RmwRequestId, EvaluateBatchRequest),
+}
+
+/// An answer ready to be written to DDS.
+pub(super) enum Reply {
+    /// To a `/cstep/evaluate` request.
+    Evaluate(RmwRequestId, EvaluateResponse),
+    /// To a `/cstep/evaluate_batch` request.
+    Batch(RmwRequestId, EvaluateBatchResponse),
+}
+
+impl Job {
+    /// Scores the request (a malformed one is answered `valid = false` with the reason).
+    fn answer(self, shared: &Shared) -> Reply {
+        match self {
+            Job::Evaluate(id, request) => Reply::Evaluate(id, shared.evaluate_request(&request)),
+            Job::Batch(id, request) => Reply::Batch(id, shared.evaluate_batch(&request)),
+        }
+    }
+
+    /// The answer to a request that the queue refused (`full`): every state unscored,
+    /// `valid = false`, the reason as status; counted as refused, and said by the next
+    /// diagnostics.
+    pub(super) fn refuse(self, shared: &Shared, full: Full) -> Reply {
+        let reason = full.reason();
+        shared.note_problem(|l| l.requests_refused += 1, &reason);
+        let c = shared.safety_coefficient();
+        match self {
+            Job::Evaluate(id, request) => {
+                let (empowerment, reward) = shared.rejected(request.scan.header, reason, c);
+                Reply::Evaluate(
+                    id,
+                    EvaluateResponse {
+                        empowerment,
+                        reward,
+                    },
+                )
+            }
+            Job::Batch(id, request) => {
+                let states = request.odom.len().max(request.scan.len());
+                let (empowerment, reward) = (0..states)
+                    .map(|i| {
+                        let header = request.scan.get(i).map(|s| s.header.clone());
+                        shared.rejected(header.unwrap_or_default(), reason.clone(), c)
+                    })
+                    .unzip();
+                Reply::Batch(
+                    id,
+                    EvaluateBatchResponse {
+                        empowerment,
+                        reward,
+                    },
+                )
+            }
+        }
+    }
+}
+
+/// The service worker: takes the queued requests in turn ([`super::queue::FairQueue::pop`]),
+/// answers each, and hands the answer to the DDS side through `replies`; returns when the node
+/// stops or the DDS side is gone. Runs on a thread of its own, so that a long batch never
+/// holds up the DDS side taking the next requests off the readers.
+pub(super) fn answer_queued(shared: &Shared, replies: &smol::channel::Sender<Reply>) {
+    while !shared.stopping.load(Ordering::SeqCst) {
+        let Some(job) = shared.requests.pop_timeout(Duration::from_millis(100)) else {
+            continue;
+        };
+        let reply = job.answer(shared);
+        shared.latest().requests_answered += 1;
+        if replies.send_blocking(reply).is_err() {
+            return;
+        }
+    }
+}
 
 impl Shared {
     /// The service answer for one state: its score, or for a malformed one the floor with

@@ -5,6 +5,8 @@ use std::sync::atomic::AtomicBool;
 use std::sync::{Arc, Condvar, Mutex};
 use std::time::{Duration, Instant};
 
+use super::queue::{Limits, SharedQueue};
+use super::service::Job;
 use crate::estimator::Estimator;
 use crate::ros::messages::{LaserScan, Odometry, Point, Time};
 use crate::ros::stamps::{Order, StampOrder};
@@ -22,6 +24,8 @@ pub(super) struct Shared {
     pub(super) mailbox: Mutex<Option<PostedScan>>,
     pub(super) arrived: Condvar,
     pub(super) stopping: Arc<AtomicBool>,
+    /// The services' requests waiting for the service worker, by client.
+    pub(super) requests: SharedQueue<ros2_client::Gid, Job>,
 }
 
 /// A scan waiting to be scored.
@@ -47,6 +51,13 @@ pub(super) struct Latest {
     pub(super) stale: u64,
     pub(super) rejected: u64,
     pub(super) markers_published: u64,
+    /// Service requests answered (scored, or rejected as malformed).
+    pub(super) requests_answered: u64,
+    /// Service requests refused unscored because the request queue was full (answered with
+    /// `valid = false` and the reason).
+    pub(super) requests_refused: u64,
+    /// Service answers that could not be written to DDS.
+    pub(super) replies_failed: u64,
     pub(super) last_problem: Option<String>,
     /// The newest scored scan's stamp: an older one arriving later is late, or time jumped back.
     pub(super) order: StampOrder,
@@ -83,7 +94,17 @@ impl Shared {
             mailbox: Mutex::new(None),
             arrived: Condvar::new(),
             stopping,
+            requests: SharedQueue::new(Limits {
+                per_client: 16,
+                total: 128,
+            }),
         }
+    }
+
+    /// The same, with the services' request queue holding at most `limits`.
+    pub(super) fn with_request_limits(mut self, limits: Limits) -> Self {
+        self.requests = SharedQueue::new(limits);
+        self
     }
 
     pub(super) fn latest(&self) -> std::sync::MutexGuard<'_, Latest> {

@@ -6,20 +6,26 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use futures::StreamExt;
-use ros2_client::{Message, Node, Server};
+use ros2_client::{Message, Node, RmwRequestId, Server};
 use tracing::warn;
 
 use super::clock::NodeClock;
 use super::diagnostics::StatusIdentity;
 use super::guard::Guard;
 use super::ports::Ports;
+use super::service::{Job, Reply};
 use super::shared::{PostedScan, Shared};
 use crate::ros::convert::goal_position;
 use crate::ros::rivals::{self, Verdict};
 
-/// The DDS-side tasks: keep the newest odometry and goal, post scans, answer the service,
-/// publish diagnostics, watch for rivals ([`Guard`]); returns when Ctrl-C was pressed, or when a
-/// rival found at start-up made the node refuse to run (the reason is in `Latest::refusal`).
+/// How long an answer waits for its client's response reader to be matched before it is
+/// written anyway (see [`send_replies`]). Discovery takes 1-4 s on a loaded machine.
+const REPLY_MATCH_WAIT: Duration = Duration::from_secs(10);
+
+/// The DDS-side tasks: keep the newest odometry and goal, post scans, queue the services'
+/// requests for the service worker and write its answers (`replies`), publish diagnostics,
+/// watch for rivals ([`Guard`]); returns when Ctrl-C was pressed, or when a rival found at
+/// start-up made the node refuse to run (the reason is in `Latest::refusal`).
 pub(super) async fn serve(
     shared: &Arc<Shared>,
     ports: &Ports,
@@ -27,7 +33,12 @@ pub(super) async fn serve(
     guard: &Guard,
     status: &StatusIdentity,
     clock: &NodeClock,
+    replies: (
+        &smol::channel::Sender<Reply>,
+        &smol::channel::Receiver<Reply>,
+    ),
 ) {
+    let (reply_sender, reply_receiver) = replies;
     let odometry = ports.odom.async_stream().for_each(|received| async move {
         match received {
             Ok((odom, _)) => shared.latest().odom = Some((odom, Instant::now())),
@@ -76,13 +87,21 @@ pub(super) async fn serve(
         }
         shared.arrived.notify_one();
     });
-    let service = answer_requests(shared, &ports.evaluate, "evaluate", |request| {
-        shared.evaluate_request(request)
-    });
-    let batch_service =
-        answer_requests(shared, &ports.evaluate_batch, "evaluate_batch", |request| {
-            shared.evaluate_batch(request)
-        });
+    let service = queue_requests(
+        shared,
+        &ports.evaluate,
+        "evaluate",
+        Job::Evaluate,
+        reply_sender,
+    );
+    let batch_service = queue_requests(
+        shared,
+        &ports.evaluate_batch,
+        "evaluate_batch",
+        Job::Batch,
+        reply_sender,
+    );
+    let answers = send_replies(shared, ports, node, reply_receiver);
     let diagnostics = async {
         loop {
             smol::Timer::after(Duration::from_secs(1)).await;
@@ -124,6 +143,7 @@ pub(super) async fn serve(
         Box::pin(scans),
         Box::pin(service),
         Box::pin(batch_service),
+        Box::pin(answers),
         Box::pin(diagnostics),
         Box::pin(rivals),
         Box::pin(stopped),
@@ -131,31 +151,95 @@ pub(super) async fn serve(
     .await;
 }
 
-/// Answers each request `server` receives with `answer`, until the request stream ends; a reply
-/// that cannot be sent is noted for diagnostics (`name` says which service's). A request that
-/// cannot be decoded is counted as rejected like an undecodable topic message; it cannot be
-/// answered, as ros2-client drops its request id with the payload.
-pub(super) async fn answer_requests<Req, Resp>(
+/// Takes each request `server` receives off its DDS reader at once and queues it for the
+/// service worker, by client ([`super::queue`]); a request the queue refuses is answered at once
+/// with `valid = false` and the reason (through `replies`), never dropped. A request that cannot
+/// be decoded is counted as rejected like an undecodable topic message (`name` says which
+/// service's); it cannot be answered, as ros2-client drops its request id with the payload.
+pub(super) async fn queue_requests<Req, Resp>(
     shared: &Shared,
     server: &Server<Req, Resp>,
     name: &str,
-    answer: impl Fn(&Req) -> Resp,
+    job: impl Fn(RmwRequestId, Req) -> Job,
+    replies: &smol::channel::Sender<Reply>,
 ) where
     Req: Message + Clone + 'static,
     Resp: Message + 'static,
 {
-    let answer = &answer;
+    let job = &job;
     server
         .receive_request_stream()
         .for_each(|received| async move {
             match received {
+                // The client is named by its response reader (rmw_fastrtps) or request writer.
                 Ok((id, request)) => {
-                    if let Err(e) = server.async_send_response(id, answer(&request)).await {
-                        shared.latest().last_problem = Some(format!("{name} reply failed: {e:?}"));
+                    if let Err((full, refused)) =
+                        shared.requests.push(id.writer_gid, job(id, request))
+                    {
+                        let _ = replies.send(refused.refuse(shared, full)).await;
                     }
                 }
                 Err(e) => shared.undecodable(name, "request", &e),
             }
         })
         .await;
+}
+
+/// Writes the answers the service worker (and the queue's refusals) hand over, each once its
+/// client's response reader is matched ([`wait_for_client`]), many at a time, so that a client
+/// not yet matched never holds up the others. A reply that cannot be written is counted and
+/// noted for diagnostics.
+async fn send_replies(
+    shared: &Shared,
+    ports: &Ports,
+    node: &Node,
+    replies: &smol::channel::Receiver<Reply>,
+) {
+    replies
+        .clone()
+        .for_each_concurrent(None, |reply| async move {
+            let (id, result, name) = match reply {
+                Reply::Evaluate(id, response) => {
+                    wait_for_client(node, &ports.evaluate, &id).await;
+                    let sent = ports.evaluate.async_send_response(id, response).await;
+                    (id, sent, "evaluate")
+                }
+                Reply::Batch(id, response) => {
+                    wait_for_client(node, &ports.evaluate_batch, &id).await;
+                    let sent = ports.evaluate_batch.async_send_response(id, response).await;
+                    (id, sent, "evaluate_batch")
+                }
+            };
+            if let Err(e) = result {
+                shared.note_problem(
+                    |l| l.replies_failed += 1,
+                    &format!("{name} reply to {id:?} failed: {e:?}"),
+                );
+            }
+        })
+        .await;
+}
+
+/// Waits until `server`'s response writer has matched the response reader that the request
+/// `id` names, at most [`REPLY_MATCH_WAIT`]. A client's request can reach the node before the
+/// node has discovered that client's response reader; written then, the answer would never be
+/// delivered (the writer is volatile: a reader matched later is owed nothing written before).
+/// rmw_fastrtps servers wait likewise. Returns at once for an id that names no reader
+/// (ros2-client clients name their request writer).
+async fn wait_for_client<Req, Resp>(node: &Node, server: &Server<Req, Resp>, id: &RmwRequestId)
+where
+    Req: Message + 'static,
+    Resp: Message + 'static,
+{
+    let Some(reader) = Server::<Req, Resp>::response_reader(id) else {
+        return;
+    };
+    let writer = server.response_writer_guid();
+    if node.is_reader_matched(writer, reader) {
+        return;
+    }
+    smol::future::or(node.wait_for_reader_match(writer, reader), async {
+        smol::Timer::after(REPLY_MATCH_WAIT).await;
+    })
+    .await;
 }

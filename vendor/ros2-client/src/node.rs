@@ -934,6 +934,52 @@ impl Node {
     }
   }
 
+  /// cstep patch: whether local writer `writer` has matched remote reader
+  /// `reader` (as the Spinner has recorded DDS matching so far).
+  pub fn is_reader_matched(&self, writer: GUID, reader: GUID) -> bool {
+    self
+      .writers_to_remote_readers
+      .lock()
+      .unwrap()
+      .get(&writer)
+      .is_some_and(|readers| readers.contains(&reader))
+  }
+
+  /// cstep patch: resolves once local writer `writer` has matched the remote
+  /// reader `reader`, possibly never: callers bound it with a timer. A service
+  /// server uses it to hold a response until the client's response reader is
+  /// matched (see [`crate::Server::response_reader`]), as rmw_fastrtps does:
+  /// written before that, a response on a volatile writer is never delivered.
+  /// Needs a running Spinner; without one it resolves at once.
+  pub fn wait_for_reader_match(
+    &self,
+    writer: GUID,
+    reader: GUID,
+  ) -> impl Future<Output = ()> + 'static {
+    // Register for events before the first check, so no match falls between.
+    let events = self.status_receiver();
+    let matches = Arc::clone(&self.writers_to_remote_readers);
+    async move {
+      let matched = || {
+        matches
+          .lock()
+          .unwrap()
+          .get(&writer)
+          .is_some_and(|readers| readers.contains(&reader))
+      };
+      let Some(events) = events else {
+        return;
+      };
+      pin_mut!(events);
+      // Every event is a cue to look again: a full event channel drops some.
+      while !matched() {
+        if events.next().await.is_none() {
+          return;
+        }
+      }
+    }
+  }
+
   pub(crate) fn get_publisher_count(&self, subscription_guid: GUID) -> usize {
     self
       .readers_to_remote_writers

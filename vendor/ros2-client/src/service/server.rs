@@ -68,6 +68,24 @@ where
     })
   }
 
+  /// cstep patch: the GUID of the DDS writer that sends this server's
+  /// responses.
+  pub fn response_writer_guid(&self) -> GUID {
+    self.response_sender.guid()
+  }
+
+  /// cstep patch: the DDS reader that will take the response to `request`,
+  /// where the request names it: rmw_fastrtps (and so every rclpy or rclcpp
+  /// client on Fast DDS) sends its response reader's GUID as the writer GUID of
+  /// a request's related sample identity, which becomes
+  /// `RmwRequestId::writer_gid` here. `None` when that GUID is not a reader's
+  /// (ros2-client clients name their request writer).
+  pub fn response_reader(request: &RmwRequestId) -> Option<GUID> {
+    let guid = GUID::from(request.writer_gid);
+    (guid.entity_id.entity_kind.is_reader() && guid.entity_id.entity_kind.is_user_defined())
+      .then_some(guid)
+  }
+
   /// Receive a request from Client.
   /// Returns `Ok(None)` if no new requests have arrived.
   pub fn receive_request(&self) -> ReadResult<Option<(RmwRequestId, Req)>> {

@@ -109,12 +109,13 @@ def test_new_one_shot_clients_each_get_their_first_answer(cstep_node):
 def test_pipelining_clients_get_every_answer_once_and_the_right_one(cstep_node, loaded, request):
     if loaded:
         request.getfixturevalue("cpu_load")
-    # Before issue 44, 4 clients x 8 in flight got 50, 50, 0 and 1 answers: a keep-last-10
-    # request reader overwrote requests, and a whole batch blocked the DDS side.
-    results = pipelining(clients=4, requests=16, in_flight=8, states=4)
+    # Before issue 44, this left a client starved (0 of 8 answered, for good) and another short
+    # of 4: a keep-last-10 request reader overwrote requests, and each batch was scored on the
+    # DDS side, which meanwhile took no request off the reader.
+    results = pipelining(clients=4, requests=40, in_flight=8, states=32)
     for r in results:
         assert "error" not in r, r
-        assert (r["sent"], r["answered"], r["wrong"], r["refused"]) == (16, 16, 0, 0), r
+        assert (r["sent"], r["answered"], r["wrong"], r["refused"]) == (40, 40, 0, 0), r
 
 
 def test_requests_past_the_clients_limit_are_answered_with_the_reason(

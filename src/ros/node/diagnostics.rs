@@ -74,7 +74,7 @@ impl Shared {
             ("inputs_rejected", latest.rejected.to_string()),
             ("time_jumps", latest.time_jumps.to_string()),
             ("markers_published", latest.markers_published.to_string()),
-            ("requests_waiting", self.requests.len().to_string()),
+            ("requests_waiting", self.requests.waiting().to_string()),
             ("requests_answered", latest.requests_answered.to_string()),
             ("requests_refused", latest.requests_refused.to_string()),
             ("replies_failed", latest.replies_failed.to_string()),

@@ -153,7 +153,7 @@ impl<C: Clone + Eq + Hash, T> SharedQueue<C, T> {
     }
 
     /// Requests waiting now.
-    pub fn len(&self) -> usize {
+    pub fn waiting(&self) -> usize {
         self.lock().len()
     }
 

@@ -18,8 +18,9 @@ use crate::scoring::{unscorable, Score};
 
 /// A request waiting for the service worker: which service's, and the id to answer it under.
 pub(super) enum Job {
-    /// A `/cstep/evaluate` request.
-    Evaluate(RmwRequestId, EvaluateRequest),
+    /// A `/cstep/evaluate` request (boxed: a scan and an odometry, larger than a batch's
+    /// vectors).
+    Evaluate(RmwRequestId, Box<EvaluateRequest>),
     /// A `/cstep/evaluate_batch` request.
     Batch(RmwRequestId, EvaluateBatchRequest),
 }

@@ -91,7 +91,7 @@ pub(super) async fn serve(
         shared,
         &ports.evaluate,
         "evaluate",
-        Job::Evaluate,
+        |id, request| Job::Evaluate(id, Box::new(request)),
         reply_sender,
     );
     let batch_service = queue_requests(

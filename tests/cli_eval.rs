@@ -6,8 +6,9 @@ mod common;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
+use cstep::arena::PAPER_WORLD;
 use cstep::ros::messages::{LaserScan, Odometry};
-use cstep::scene::{Lidar, Scene};
+use cstep::scene::Scene;
 use nalgebra::{UnitQuaternion, Vector2};
 use serde_json::Value;
 
@@ -25,7 +26,7 @@ fn corridor_scan() -> LaserScan {
     let scan = Scene::corridor(2.0, 20.0).scan(
         Vector2::new(0.0, 0.2),
         &UnitQuaternion::identity(),
-        &Lidar::PAPER,
+        &PAPER_WORLD.lidar,
     );
     LaserScan {
         angle_min: scan.angle_min as f32,

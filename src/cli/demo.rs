@@ -10,7 +10,7 @@ use nalgebra::UnitQuaternion;
 use ros2_client::qos::{Durability, History, WhenFull};
 use ros2_client::{MessageTypeName, Name, NodeName, NodeOptions, QosProfile};
 
-use cstep::arena::{Arena, Flight};
+use cstep::arena::{Arena, Flight, PAPER_WORLD};
 use cstep::plot::{flight_svg, FlightSample};
 use cstep::ros::args::RosArgs;
 use cstep::ros::context::{context_from_env, ContextError};
@@ -18,7 +18,6 @@ use cstep::ros::convert::scan_to_laser_scan;
 use cstep::ros::messages::{
     EmpoweredReward, Empowerment, Header, LaserScan, Odometry, PoseStamped, RosMessage, Time,
 };
-use cstep::scene::Lidar;
 
 use super::node::stop_on_ctrl_c;
 use super::CliError;
@@ -241,7 +240,7 @@ fn fly(args: &DemoArgs, stop: &std::sync::atomic::AtomicBool) -> Result<Vec<Scor
                 (goal.pose.position.x, goal.pose.position.y, goal.pose.position.z) = (end.x, end.y, end.z);
                 // Best effort: the goal only shapes the task reward.
                 let _ = goal_pub.publish(goal);
-                let scan = arena.scene.scan(p, &UnitQuaternion::identity(), &Lidar::PAPER);
+                let scan = arena.scene.scan(p, &UnitQuaternion::identity(), &PAPER_WORLD.lidar);
                 let scan_msg = scan_to_laser_scan(&scan, Header { stamp, frame_id: "base_link".into() });
                 if odom_pub.publish(odom).is_ok() && scan_pub.publish(scan_msg).is_ok() {
                     sent.insert((stamp.sec, stamp.nanosec), (t, Instant::now()));

@@ -3,6 +3,7 @@
 //! included by the tests that need it: the examples share this module and have no binary.)
 #![allow(dead_code)]
 
+use cstep::arena::PAPER_WORLD;
 use cstep::config::Settings;
 use cstep::estimator::{Estimate, Estimator};
 use cstep::occupancy::Scan;
@@ -29,7 +30,7 @@ pub fn scan_of(scene: &Scene, position: Vector2<f64>) -> Scan {
 
 /// The paper's LiDAR (180 beams, 3 m) scanning `scene` from `position`.
 pub fn paper_scan(scene: &Scene, position: Vector2<f64>) -> Scan {
-    scene.scan(position, &UnitQuaternion::identity(), &Lidar::PAPER)
+    scene.scan(position, &UnitQuaternion::identity(), &PAPER_WORLD.lidar)
 }
 
 /// A robot at rest at `(x, y)` at 1 m altitude.

@@ -165,7 +165,7 @@ mod tests {
     #[test]
     fn the_paper_world_file_reads_and_holds_the_papers_setting() {
         let world = &*PAPER_WORLD;
-        assert_eq!(world.lidar, Lidar::PAPER);
+        assert_eq!((world.lidar.beams, world.lidar.range_max), (180, 3.0)); // the paper's
         let draws = &world.arena.draws;
         for range in [
             draws.block_y,

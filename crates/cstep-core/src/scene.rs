@@ -38,15 +38,6 @@ pub struct Lidar {
     pub range_max: f64,
 }
 
-impl Lidar {
-    /// The paper's LiDAR: 180 beams over 360°, 3 m range.
-    pub const PAPER: Lidar = Lidar {
-        beams: 180,
-        range_min: 0.02,
-        range_max: 3.0,
-    };
-}
-
 impl Scene {
     /// An empty world.
     pub fn open() -> Self {

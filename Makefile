@@ -56,8 +56,8 @@ test-python: $(MSGS_STAMP) $(SCORING_STAMP) $(COLCON_STAMP)
 	$(VENV_ENV) CSTEP_BIN=$(abspath $(TARGET_DIR))/release/cstep \
 		CSTEP_COLCON_INSTALL=$(abspath $(COLCON_WS))/install $(VPY) -m pytest -q tests/python
 
-# Rewrites the README's parameter table and config/cstep.yaml from the parameter table in
-# src/parameters.rs (`make test` fails while they differ from it).
+# Rewrites docs/parameters.md and config/cstep.yaml from the parameter table in
+# crates/cstep-core/src/parameters.rs (`make test` fails while they differ from it).
 parameter-docs:
 	CSTEP_WRITE_DOCS=1 $(CARGO) test --test parameter_docs
 

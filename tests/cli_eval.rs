@@ -320,7 +320,7 @@ fn malformed_inputs_fail_with_one_line_naming_file_and_field() {
 
 #[test]
 fn misspelt_fields_are_refused_with_their_path_and_the_field_meant() {
-    // Issue 45, item 5: "pos" for "position" and "linaer" for "linear" were silently dropped
+    // Regression: "pos" for "position" and "linaer" for "linear" were silently dropped
     // and the odometry scored as a robot at the origin at rest, exit code 0.
     let dir = workdir("misspelt");
     let (good_odom, good_scan) = write_valid_inputs(&dir);

@@ -51,7 +51,7 @@ fn a_parameters_file_that_never_ends_is_refused_at_start() {
 
 #[test]
 fn remaps_that_put_two_of_its_ports_on_one_name_are_refused() {
-    // Issue 45, item 6: each of these was accepted without a word.
+    // Regression: each of these was accepted without a word.
     for (args, words) in [
         (
             "cstep/reward:=cstep/empowerment",
@@ -83,7 +83,7 @@ fn remaps_that_put_two_of_its_ports_on_one_name_are_refused() {
 
 #[test]
 fn a_name_longer_than_rcl_allows_is_refused_quoting_only_its_start() {
-    // Issue 45, item 6: a 60 000-character name was accepted (rcl refuses over 247).
+    // Regression: a 60 000-character name was accepted (rcl refuses over 247).
     let rule = format!("scan:={}", "a".repeat(60_000));
     let out = node(&["-r", &rule]);
     assert_refused(

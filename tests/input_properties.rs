@@ -5,7 +5,7 @@
 //! outputs, exactly as the node, the services and `cstep eval` do.
 //!
 //! `cargo test` runs proptest's default 256 cases per property (`PROPTEST_CASES` overrides it);
-//! the long run is documented in the README, "Safety and exposure":
+//! the long run is documented in `docs/results/protocol.md` ("The long property-test run"):
 //! `PROPTEST_CASES=10000000 cargo test --release --test input_properties`.
 
 use std::f64::consts::{PI, TAU};
@@ -25,7 +25,7 @@ use proptest::prelude::*;
 const MAX_ERROR_CHARS: usize = 320;
 
 /// Longest number in an error message: an `f64` printed shortest-roundtrip takes at most 24
-/// characters (`-2.2250738585072014e-308`); issue 12, failure 9: a 1e-160 component printed
+/// characters (`-2.2250738585072014e-308`); a 1e-160 component printed
 /// 160 digits.
 const MAX_NUMBER_CHARS: usize = 24;
 
@@ -324,7 +324,7 @@ proptest! {
     }
 
     /// Any scan is one whose beams span at most one turn plus two increments and agree with
-    /// `angle_max` within an increment (issue 12, failure 9: 1e30 rad between two beams), or an
+    /// `angle_max` within an increment (once, 1e30 rad between two beams), or an
     /// error naming a field.
     #[test]
     fn any_scan_is_a_meaningful_one_or_a_short_error(msg in wild_scan()) {

@@ -1,7 +1,7 @@
 //! `cstep bench`: evaluation speed on a fixed scene, as medians over repeated runs.
 //!
-//! The scene is [`cstep::scene::benchmark_case`]; by default one core, as the targets in the
-//! README are stated.
+//! The scene is [`cstep::scene::benchmark_case`]; by default one core, as the targets in
+//! docs/measurements.md are stated.
 
 use std::time::{Duration, Instant};
 

@@ -811,7 +811,7 @@ mod tests {
 
     #[test]
     fn names_longer_than_rcl_allows_are_refused_quoting_only_an_excerpt() {
-        // Issue 45, item 6: a 60 000-character remap was accepted (rcl refuses a topic name over
+        // Regression: a 60 000-character remap was accepted (rcl refuses a topic name over
         // 247 characters, a node name over 255, a namespace over 245), and errors quoted values
         // whole.
         let long = "a".repeat(60_000);

@@ -406,7 +406,7 @@ mod tests {
                 .to_string();
             assert!(err.contains("ROS_DOMAIN_ID") && err.contains(bad), "{err}");
         }
-        // A long value is quoted by its start and length (issue 45).
+        // A long value is quoted by its start and length.
         let long = "9".repeat(120_000);
         let err = Discovery::from_vars(vars(&[("ROS_DOMAIN_ID", &long)])).unwrap_err();
         assert!(

@@ -585,7 +585,7 @@ mod tests {
             EchoType::parse("Odometry").unwrap_err().to_string(),
             "message type \"Odometry\" is not of the form pkg/msg/Name"
         );
-        // A long argument is quoted by its start and length (issue 45).
+        // A long argument is quoted by its start and length.
         assert_eq!(
             EchoType::parse(&"T".repeat(120_000))
                 .unwrap_err()

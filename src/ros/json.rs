@@ -258,7 +258,7 @@ mod tests {
 
     #[test]
     fn misspelt_fields_are_refused_with_their_path_and_the_field_meant() {
-        // Issue 45, item 5: this was scored as a robot at the origin, at rest.
+        // Regression: this was scored as a robot at the origin, at rest.
         let odom = r#"{"pose": {"pose": {"pos": {"x": 3.0}}},
                        "twist": {"twist": {"linaer": {"x": 1.0}}}}"#;
         assert_eq!(

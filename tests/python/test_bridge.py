@@ -289,7 +289,7 @@ def test_a_reply_that_does_not_come_times_out_and_a_late_one_is_not_taken_for_th
 
 
 def test_a_node_that_dies_is_a_typed_error_exported_by_the_package(ros_domain):
-    """Issue 44: the node's death was a bare RuntimeError, which a training loop could not tell
+    """Regression: the node's death was a bare RuntimeError, which a training loop could not tell
     from any other. It is a NodeDied (still a RuntimeError) with the exit code and the log."""
     bridge = RosBridge(domain_id=ros_domain, timeout=5.0)
     sim = DroneSim(arena(-0.9))

@@ -213,7 +213,7 @@ def test_cstep_bin_pointing_at_nothing_is_an_error_not_a_fallback(nothing_to_fin
 
 
 def test_cstep_bin_that_cannot_run_is_the_same_error_as_a_missing_one(nothing_to_find, monkeypatch):
-    """Issue 44: a ``$CSTEP_BIN`` without execute permission was found, and starting the node
+    """Regression: a ``$CSTEP_BIN`` without execute permission was found, and starting the node
     failed with a raw PermissionError traceback. It is refused as a missing one is, saying why."""
     executable(nothing_to_find / "target/release/cstep")  # would be found without the variable
     hint = "Build it (cargo build --release) or set CSTEP_BIN to the binary."

@@ -682,7 +682,7 @@ mod tests {
 
     #[test]
     fn evaluations_beyond_the_memory_budget_are_refused_naming_values_and_budget() {
-        // Issue 12, failure 6: 100 000 × 10 000 validated, then the first evaluation asked for
+        // Regression: 100 000 × 10 000 validated, then the first evaluation asked for
         // 7.5 GiB and the allocator aborted the process.
         let dir = temp_dir("budget");
         let path = write(
@@ -722,7 +722,7 @@ mod tests {
 
     #[test]
     fn errors_quote_a_long_value_or_name_by_its_start_and_length() {
-        // Issue 45: a 15 MiB string value gave a 15.7 MB error line, a 120 KB `-p` value a
+        // Regression: a 15 MiB string value gave a 15.7 MB error line, a 120 KB `-p` value a
         // 120 KB line.
         let dir = temp_dir("excerpt");
         let long = "x".repeat(1 << 20);
@@ -773,7 +773,7 @@ mod tests {
                 "volume_dims: 4",
                 "'volume_dims' must be one of 2 | 3, got 4",
             ),
-            // Issue 45, item 5: a misspelling names the parameter meant.
+            // A misspelling names the parameter meant.
             (
                 "horizn: 1.0",
                 "unknown parameter 'horizn', did you mean 'horizon'?",
@@ -782,7 +782,7 @@ mod tests {
                 "colour: 1.0",
                 "unknown parameter 'colour' (known: robot_description, model, ",
             ),
-            // Issue 12, failure 9: NaN said "must be set (... a file or -p cleared it)", and a
+            // Regression: NaN said "must be set (... a file or -p cleared it)", and a
             // list gave a three-line error.
             (
                 "horizon: .nan",

@@ -132,7 +132,7 @@ mod tests {
 
     #[test]
     fn endless_devices_fifos_and_directories_are_refused_saying_what_they_are() {
-        // Issue 12, failure 7: /dev/zero was read until memory ran out, a FIFO blocked forever.
+        // Regression: /dev/zero was read until memory ran out, a FIFO blocked forever.
         assert_eq!(
             refusal(Path::new("/dev/zero")),
             "it is a character device, not a regular file (inputs must be regular files)"

@@ -385,7 +385,7 @@ mod tests {
 
     #[test]
     fn a_file_of_many_sections_is_one_table_and_warns_in_one_short_line() {
-        // Issue 45: sections for other nodes were looked up one by one, so a file's cost grew
+        // Regression: sections for other nodes were looked up one by one, so a file's cost grew
         // with the square of their number (15 MiB: 470 s).
         let sections: String = (0..15_000)
             .map(|i| format!("/ns/node_{i}:\n  ros__parameters:\n    a: {i}\n"))

@@ -3,7 +3,7 @@
 //!
 //! [`PARAMETERS`] drives the validation of parameter files and `-p` overrides
 //! ([`crate::config`]), the node's parameter declarations and their ROS 2 descriptors
-//! (`ros::parameters`), and the parameter table of the README and `config/cstep.yaml`, which
+//! (`ros::parameters`), and the table of `docs/parameters.md` and `config/cstep.yaml`, which
 //! `tests/parameter_docs.rs` writes from it (`CSTEP_WRITE_DOCS=1`) and otherwise checks, so none
 //! of them can drift from the table.
 
@@ -125,7 +125,8 @@ pub struct Parameter {
     pub default: &'static str,
     /// The unit of a number (`s`, `m`, `m/s²`), if it has one.
     pub unit: Option<&'static str>,
-    /// What it means, for people: the README, `config/cstep.yaml`, `ros2 param describe`.
+    /// What it means, for people: `docs/parameters.md`, `config/cstep.yaml`,
+    /// `ros2 param describe`.
     pub description: &'static str,
     /// Whether it may change while the node runs.
     pub change: Change,
@@ -139,8 +140,8 @@ const MAX_TRAJECTORIES: i64 = 100_000;
 /// Largest accepted step count: beyond it an evaluation takes seconds.
 const MAX_STEPS: i64 = 10_000;
 
-/// Every parameter, in the order the README and `config/cstep.yaml` list them: the evaluation's
-/// first, then the node's ROS interface. The names are a contract with users' parameter files.
+/// Every parameter, in the order `docs/parameters.md` and `config/cstep.yaml` list them: the
+/// evaluation's first, then the node's ROS interface. The names are a contract with users' parameter files.
 pub const PARAMETERS: &[Parameter] = &[
     Parameter {
         name: "robot_description",

@@ -315,7 +315,7 @@ mod tests {
 
     #[test]
     fn a_malformed_request_never_scores_better_than_a_collision() {
-        // Issue 12, failure 9: a malformed request answered reward 0.0, better than the
+        // Regression: a malformed request answered reward 0.0, better than the
         // floor a robot touching a wall scores, so bad input paid.
         for c in [0.2, 1.0, 3.0, 5e4] {
             let node = shared(c);

@@ -74,7 +74,7 @@ fuzz-cdr:
 # The adversarial parameters files of tests/yaml_fuzz.rs at length: deep nesting, many sections
 # and parameters, aliases, long scalars and keys, directives, each up to the 16 MiB input cap,
 # each read or refused within 5 s. `make test` runs 24 cases; this runs YAML_FUZZ_CASES (about
-# 20 minutes on one core) in the test profile, which `make test` has built already.
+# 3 minutes on one core) in the test profile, which `make test` has built already.
 YAML_FUZZ_CASES ?= 2000
 YAML_FUZZ_SEED ?= 1
 fuzz-yaml:

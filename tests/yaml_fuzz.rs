@@ -93,7 +93,8 @@ impl Recipe {
                 open,
                 closed,
             } => {
-                let depth = depth.min(ROOM / 4);
+                // At most five bytes a level (`{a: ` and `}`).
+                let depth = depth.min(ROOM / 5);
                 text += OWN_SECTION;
                 text += "    nested: ";
                 let mut closes = Vec::with_capacity(depth);
@@ -207,7 +208,7 @@ impl Recipe {
                 text += "\n";
             }
             Recipe::Directives { count } => {
-                for t in 0..count.min(ROOM / 32) {
+                for t in 0..count.min(ROOM / 48) {
                     writeln!(text, "%TAG !t{t}! tag:example.com,2000:").unwrap();
                 }
                 text += "---\n";

@@ -8,15 +8,29 @@ use std::borrow::Cow;
 pub const EXCERPT_CHARS: usize = 80;
 
 /// `text` as an error quotes it: whole when it has at most [`EXCERPT_CHARS`] characters, else its
-/// first [`EXCERPT_CHARS`] followed by `… (N characters)`.
+/// first [`EXCERPT_CHARS`] followed by `… (N characters)`; control characters (a line break in a
+/// YAML block scalar) escaped as Rust escapes them (`\n`), so that the error stays one line.
 pub fn excerpt(text: &str) -> Cow<'_, str> {
-    match text.char_indices().nth(EXCERPT_CHARS) {
-        None => Cow::Borrowed(text),
-        Some((end, _)) => Cow::Owned(format!(
-            "{}… ({} characters)",
-            &text[..end],
-            text.chars().count()
-        )),
+    let end = text.char_indices().nth(EXCERPT_CHARS).map(|(end, _)| end);
+    let start = &text[..end.unwrap_or(text.len())];
+    let shown: Cow<'_, str> = if start.contains(char::is_control) {
+        start
+            .chars()
+            .map(|c| {
+                if c.is_control() {
+                    c.escape_default().to_string()
+                } else {
+                    c.to_string()
+                }
+            })
+            .collect::<String>()
+            .into()
+    } else {
+        start.into()
+    };
+    match end {
+        None => shown,
+        Some(_) => format!("{shown}… ({} characters)", text.chars().count()).into(),
     }
 }
 
@@ -27,6 +41,8 @@ mod tests {
     #[test]
     fn short_text_is_whole_and_long_text_its_start_and_length() {
         assert_eq!(excerpt("scan"), "scan");
+        // Found by tests/yaml_fuzz.rs: a block scalar's line break made a two-line error.
+        assert_eq!(excerpt("x y\nx\ty\n"), "x y\\nx\\ty\\n");
         let at_limit = "a".repeat(EXCERPT_CHARS);
         assert_eq!(excerpt(&at_limit), at_limit);
         let long = format!("/{}", "é".repeat(60_000));

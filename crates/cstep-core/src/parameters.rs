@@ -674,6 +674,12 @@ mod tests {
                 "'my scan'",
                 "'scan_topic' must be a ROS name without spaces, got \"my scan\"",
             ),
+            // A line break is escaped: an error stays one line (found by tests/yaml_fuzz.rs).
+            (
+                "sampler",
+                "|\n  x\n  y\n",
+                "'sampler' must be one of bang_bang | fourier | chebyshev, got \"x\\ny\\n\"",
+            ),
         ];
         for (name, value, expected) in refusals {
             assert_eq!(

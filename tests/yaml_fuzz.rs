@@ -356,7 +356,7 @@ fn every_file_under_the_cap_is_read_or_refused_within_seconds() {
 
 #[test]
 fn the_files_that_stalled_the_node_are_read_or_refused_within_seconds() {
-    // Issue 45's measurements: 200 000 nested `[` took 45–74 s to be refused; other nodes'
+    // Measured before: 200 000 nested `[` took 45–74 s to be refused; other nodes'
     // sections 5.7 s at 2.7 MB and 470 s at 15 MiB; and the shapes that cost the same way.
     let path = scratch().join("reported.yaml");
     let cases = [
@@ -427,7 +427,7 @@ fn the_files_that_stalled_the_node_are_read_or_refused_within_seconds() {
 
 #[test]
 fn sigterm_stops_the_node_while_it_reads_its_parameters_file() {
-    // Issue 45: the node ignored SIGTERM for up to 440 s while it parsed a parameters file. The
+    // Once the node ignored SIGTERM for up to 440 s while it parsed a parameters file. The
     // file here is the largest shape it reads (one section of 49 000 parameters, which before
     // took seconds in the square of its size); the signal comes while it is being read.
     let path = scratch().join("sigterm.yaml");

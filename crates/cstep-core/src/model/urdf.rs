@@ -138,14 +138,20 @@ pub struct RobotDescription {
     pub gravity: f64,
 }
 
+/// The text of the URDF at `path` and the path as error messages name it.
+pub(crate) fn read_urdf(path: &Path) -> Result<(String, String), UrdfError> {
+    let file = path.display().to_string();
+    let xml = crate::input_file::read_to_string(path).map_err(|error| UrdfError::Io {
+        file: file.clone(),
+        error,
+    })?;
+    Ok((xml, file))
+}
+
 impl RobotDescription {
     /// Reads and validates the URDF at `path`; messages name the path as given.
     pub fn load(path: &Path) -> Result<Self, UrdfError> {
-        let file = path.display().to_string();
-        let xml = crate::input_file::read_to_string(path).map_err(|error| UrdfError::Io {
-            file: file.clone(),
-            error,
-        })?;
+        let (xml, file) = read_urdf(path)?;
         Self::from_str(&xml, &file)
     }
 

@@ -19,7 +19,7 @@ use std::path::Path;
 
 use nalgebra::{Isometry3, Matrix3, Translation3, UnitQuaternion, Vector3};
 
-use super::urdf::{document, element, non_negative, positive, UrdfError};
+use super::urdf::{document, element, non_negative, positive, read_urdf, UrdfError};
 
 /// The cosine the angle between a wheel's spin axis and the robot's y axis (and between the
 /// axis of its collision cylinder and its spin axis) must exceed: within about 8°.
@@ -90,11 +90,7 @@ pub struct WheeledDescription {
 impl WheeledDescription {
     /// Reads and validates the URDF at `path`; messages name the path as given.
     pub fn load(path: &Path) -> Result<Self, UrdfError> {
-        let file = path.display().to_string();
-        let xml = crate::input_file::read_to_string(path).map_err(|error| UrdfError::Io {
-            file: file.clone(),
-            error,
-        })?;
+        let (xml, file) = read_urdf(path)?;
         Self::from_str(&xml, &file)
     }
 

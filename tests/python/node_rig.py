@@ -16,6 +16,7 @@ from pathlib import Path
 
 import pytest
 from conftest import REPO, wait_until
+from corridor_inputs import corridor_scan, odometry
 from cstep_bridge.resources import config_file, cstep_binary
 from cstep_msgs.msg import EmpoweredReward, Empowerment
 from diagnostic_msgs.msg import DiagnosticArray
@@ -85,35 +86,6 @@ def cstep_eval(tmp_path, odom, scan, goal=None, params: dict[str, str] | None = 
         command += ["-p", f"{name}:={value}"]
     out = subprocess.run(command, capture_output=True, text=True, check=True)
     return json.loads(out.stdout)
-
-
-def corridor_scan(sec: int, width: float = 2.5, beams: int = 180) -> LaserScan:
-    """A 360° scan from the middle of a corridor along x, 3 m range (the paper's LiDAR)."""
-    scan = LaserScan()
-    scan.header.stamp.sec = sec
-    scan.header.frame_id = "base_link"
-    scan.angle_min = -math.pi
-    scan.angle_increment = 2 * math.pi / beams
-    scan.angle_max = scan.angle_min + (beams - 1) * scan.angle_increment
-    scan.range_min = 0.02
-    scan.range_max = 3.0
-    ranges = []
-    for i in range(beams):
-        s = abs(math.sin(scan.angle_min + i * scan.angle_increment))
-        r = width / 2 / s if s > 1e-9 else math.inf
-        ranges.append(r if r <= scan.range_max else math.inf)
-    scan.ranges = ranges
-    return scan
-
-
-def odometry(vx: float = 0.5) -> Odometry:
-    odom = Odometry()
-    odom.header.frame_id = "odom"
-    odom.child_frame_id = "base_link"
-    odom.pose.pose.position.z = 1.0
-    odom.pose.pose.orientation.w = 1.0
-    odom.twist.twist.linear.x = vx
-    return odom
 
 
 class Rig:

@@ -28,66 +28,32 @@ Nothing here mocks the node: the clients talk to whichever server runs on the do
 from __future__ import annotations
 
 import argparse
-import array
 import json
-import math
 import sys
 import time
 
 _START = time.perf_counter()  # before importing rclpy, as a caller's start includes it
 
 import rclpy
+from corridor_inputs import corridor_scan, odometry
 from cstep_msgs.msg import EmpoweredReward, Empowerment
 from cstep_msgs.srv import Evaluate, EvaluateBatch
 from geometry_msgs.msg import Point
-from nav_msgs.msg import Odometry
 from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
-from sensor_msgs.msg import LaserScan
 
 DISCOVERY_TIMEOUT_S = 30.0
-BEAMS = 180
 
 
 def say(result: dict) -> None:
     print(json.dumps(result), flush=True)
 
 
-def scan(sec: int, nanosec: int, beams: int = BEAMS, width: float = 2.5) -> LaserScan:
-    """A 360° scan from the middle of a corridor along x, 3 m range, stamped ``sec.nanosec``."""
-    s = LaserScan()
-    s.header.stamp.sec = sec
-    s.header.stamp.nanosec = nanosec
-    s.header.frame_id = "base_link"
-    s.angle_min = -math.pi
-    s.angle_increment = 2 * math.pi / beams
-    s.angle_max = s.angle_min + (beams - 1) * s.angle_increment
-    s.range_min = 0.02
-    s.range_max = 3.0
-    ranges = []
-    for i in range(beams):
-        sine = abs(math.sin(s.angle_min + i * s.angle_increment))
-        r = width / 2 / sine if sine > 1e-9 else math.inf
-        ranges.append(r if r <= s.range_max else math.inf)
-    s.ranges = array.array("f", ranges)
-    return s
-
-
-def odometry(vx: float) -> Odometry:
-    o = Odometry()
-    o.header.frame_id = "odom"
-    o.child_frame_id = "base_link"
-    o.pose.pose.position.z = 1.0
-    o.pose.pose.orientation.w = 1.0
-    o.twist.twist.linear.x = vx
-    return o
-
-
 def batch_request(client: int, request: int, states: int) -> EvaluateBatch.Request:
     """``states`` corridor states, the scans stamped ``client``, ``request * 1000 + state``."""
     req = EvaluateBatch.Request()
     req.odom = [odometry(0.1 * (i % 10)) for i in range(states)]
-    req.scan = [scan(client, request * 1000 + i) for i in range(states)]
+    req.scan = [corridor_scan(client, nanosec=request * 1000 + i) for i in range(states)]
     req.goal = [Point() for _ in range(states)]
     req.has_goal = [False] * states
     return req
@@ -116,7 +82,7 @@ def once(service: str, timeout: float) -> dict:
     srv_type = Evaluate if service.endswith("/evaluate") else EvaluateBatch
     client = node.create_client(srv_type, service)
     if srv_type is Evaluate:
-        request = Evaluate.Request(odom=odometry(0.5), scan=scan(7, 7))
+        request = Evaluate.Request(odom=odometry(0.5), scan=corridor_scan(7, nanosec=7))
     else:
         request = batch_request(7, 0, 1)
     if not spin_until(node, client.service_is_ready, DISCOVERY_TIMEOUT_S):

@@ -30,7 +30,7 @@ pub const STARTUP_WINDOW: Duration = Duration::from_secs(10);
 
 /// How far apart two creation times may be and still be read as such: an unpatched RustDDS
 /// fills the bytes that carry the time with random data, which lands this close to a real
-/// time about once in 10⁵ participants.
+/// time about once in 50 000 participants (a 60-day window in 2⁴⁸ ms).
 const PLAUSIBLE_AGE_GAP_MS: u64 = 30 * 24 * 3600 * 1000;
 
 /// A DDS participant as discovery reports it.

@@ -41,7 +41,8 @@ FLYING_MODULES = (
 
 
 def _evaluation_sources() -> list[Path]:
-    """The files of this package's modules an evaluation loads, and its data files."""
+    """The files of this package's modules an evaluation loads, and its data files, each named by
+    its place in the package (a data file may be a link to the repository's ``config/``)."""
     for name in FLYING_MODULES:
         importlib.import_module(f"{__package__}.{name}")
     files = {
@@ -49,7 +50,7 @@ def _evaluation_sources() -> list[Path]:
         for name, m in list(sys.modules.items())
         if name.split(".")[0] == __package__ and getattr(m, "__file__", None)
     }
-    files |= {p.resolve() for p in (PACKAGE_DIR / "data").rglob("*") if p.is_file()}
+    files |= {p for p in (PACKAGE_DIR / "data").rglob("*") if p.is_file()}
     return sorted(files)
 
 

@@ -6,7 +6,7 @@ stdout, one line per event:
     ros_peer.py echo-empowerment TOPIC
         Subscribes to TOPIC (cstep_msgs/Empowerment, reliable, transient-local), prints
         ``ready`` once it sees a publisher, then ``received {json}`` for the first message
-        (exact values: floats as ``repr``-exact JSON numbers) and exits 0.
+        (exact values: floats as ``repr``-exact JSON numbers) and exits.
     ros_peer.py serve-evaluate SERVICE
         Serves SERVICE (cstep_msgs/srv/Evaluate) with an answer derived field by field from the
         request (see ``answer``), prints ``ready`` and ``served N`` after each call; runs until

@@ -70,17 +70,23 @@ class DroneParams:
     @classmethod
     def from_urdf(cls, path: Path | str | None = None) -> DroneParams:
         """The parameters in the URDF at ``path`` (None: the Crazyflie's,
-        :func:`~cstep_bridge.resources.drone_urdf`)."""
+        :func:`~cstep_bridge.resources.drone_urdf`), read by the core's rules
+        (``crates/cstep-core/src/model/urdf.rs``; ``tests/python/test_urdf_agreement.py`` checks
+        that both sides read the same robot): the mass of all links, the inertia and collision
+        extent of the base link (the one that is no joint's child)."""
         path = path or drone_urdf()
         root = ET.parse(path).getroot()
         props = root.find("properties")
         if props is None:
             raise ValueError(f"{path}: no <properties> element (kf, km, arm, thrust2weight)")
-        body = root.find("link[@name='body']")
-        inertial = body.find("inertial")
-        mass = float(inertial.find("mass").get("value"))
-        ine = inertial.find("inertia")
-        cyl = body.find("collision/geometry/cylinder")
+        links = root.findall("link")
+        children = {j.find("child").get("link") for j in root.findall("joint")}
+        bases = [link for link in links if link.get("name") not in children]
+        if len(bases) != 1:
+            raise ValueError(f"{path}: expected exactly one root link, found {len(bases)}")
+        (base,) = bases
+        mass = sum(float(m.get("value")) for m in root.findall("link/inertial/mass"))
+        ine = base.find("inertial/inertia")
         rotors = []
         for i in range(4):
             joint = root.find(f"joint[@name='body_to_rotor{i}']")
@@ -93,9 +99,43 @@ class DroneParams:
             km=float(props.get("km")),
             arm=float(props.get("arm")),
             thrust2weight=float(props.get("thrust2weight")),
-            radius=float(cyl.get("radius")) if cyl is not None else float(props.get("arm")),
+            radius=_collision_radius(base, path),
             rotors=tuple(rotors),
         )
+
+
+def _collision_radius(link: ET.Element, path: Path | str) -> float:
+    """The horizontal radius that encloses ``link``'s collision shapes about its origin: each
+    shape's half-width (a tilted one's bounding sphere) plus its horizontal offset."""
+    radius = None
+    for collision in link.findall("collision"):
+        origin = collision.find("origin")
+        xyz = [
+            float(v)
+            for v in (origin.get("xyz", "0 0 0") if origin is not None else "0 0 0").split()
+        ]
+        rpy = [
+            float(v)
+            for v in (origin.get("rpy", "0 0 0") if origin is not None else "0 0 0").split()
+        ]
+        geometry = collision.find("geometry")
+        shape = geometry[0] if geometry is not None and len(geometry) else None
+        if shape is None or shape.tag == "mesh":
+            continue
+        if shape.tag in ("cylinder", "capsule"):
+            r, h = float(shape.get("radius")), float(shape.get("length")) / 2
+            half_width, sphere = r, (math.hypot(r, h) if shape.tag == "cylinder" else h + r)
+        elif shape.tag == "sphere":
+            half_width = sphere = float(shape.get("radius"))
+        else:  # box
+            x, y, z = (float(v) for v in shape.get("size").split())
+            half_width, sphere = math.hypot(x, y) / 2, math.hypot(x, y, z) / 2
+        tilted = abs(rpy[0]) > 1e-9 or abs(rpy[1]) > 1e-9
+        extent = math.hypot(xyz[0], xyz[1]) + (sphere if tilted else half_width)
+        radius = extent if radius is None else max(radius, extent)
+    if radius is None:
+        raise ValueError(f"{path}: link '{link.get('name')}' has no collision shape")
+    return radius
 
 
 @dataclass

@@ -10,11 +10,12 @@
 //! ([`cstep_core::parameters::PARAMETERS`]): same names, defaults, ranges and errors as the
 //! node's parameters file and `-p` overrides.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
-use cstep_core::config::{self, ParameterSet, DEFAULT_NODE_NAME};
+use cstep_core::config::{self, is_urdf_text, ParameterSet, DEFAULT_NODE_NAME};
 use cstep_core::estimator::Estimator;
 use cstep_core::input::{self, ScanGeometry};
+use cstep_core::model::urdf::RobotDescription;
 use cstep_core::scoring::{admit, score, unscorable, Score};
 use numpy::ndarray::{Dimension, Ix1, Ix2};
 use numpy::{Element, PyArray1, PyReadonlyArray, PyUntypedArray, PyUntypedArrayMethods};
@@ -339,10 +340,40 @@ fn yaml_value(name: &str, value: &Bound<'_, PyAny>) -> PyResult<Value> {
     }
 }
 
-/// The `cstep_scoring` module: [`Scorer`], and `PAPER_WORLD_JSON`, the paper's world as the core
-/// compiled it in (`config/paper_world.json`), for the Python side to check its own copy against.
+/// ``robot_description(urdf)``: the multirotor as the core reads it from a URDF (a path or the
+/// XML text, as the ``robot_description`` parameter takes it), so the Python simulation can
+/// check that it flies the robot the scorer models. A dict: ``name``, ``mass`` (kg, all links),
+/// ``inertia`` (the base link's ``(ixx, iyy, izz)``), ``arm``, ``kf``, ``km``,
+/// ``thrust2weight``, ``collision_radius`` (m), ``gravity`` (m/s²). A URDF the core refuses
+/// raises ``ValueError`` with the core's message.
+#[pyfunction]
+fn robot_description<'py>(py: Python<'py>, urdf: &str) -> PyResult<Bound<'py, PyDict>> {
+    let description = if is_urdf_text(urdf) {
+        RobotDescription::from_str(urdf, "robot_description (URDF text)")
+    } else {
+        RobotDescription::load(Path::new(urdf))
+    }
+    .map_err(|e| PyValueError::new_err(e.to_string()))?;
+    let dict = PyDict::new(py);
+    dict.set_item("name", &description.name)?;
+    dict.set_item("mass", description.mass)?;
+    let inertia = description.inertia;
+    dict.set_item("inertia", (inertia.x, inertia.y, inertia.z))?;
+    dict.set_item("arm", description.arm)?;
+    dict.set_item("kf", description.kf)?;
+    dict.set_item("km", description.km)?;
+    dict.set_item("thrust2weight", description.thrust_to_weight)?;
+    dict.set_item("collision_radius", description.collision_radius)?;
+    dict.set_item("gravity", description.gravity)?;
+    Ok(dict)
+}
+
+/// The `cstep_scoring` module: [`Scorer`]; [`robot_description`]; and `PAPER_WORLD_JSON`, the
+/// paper's world as the core compiled it in (`config/paper_world.json`), for the Python side to
+/// check its own copy against.
 #[pymodule]
 fn cstep_scoring(module: &Bound<'_, PyModule>) -> PyResult<()> {
     module.add("PAPER_WORLD_JSON", cstep_core::arena::PAPER_WORLD_JSON)?;
+    module.add_function(wrap_pyfunction!(robot_description, module)?)?;
     module.add_class::<Scorer>()
 }

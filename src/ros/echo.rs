@@ -22,8 +22,8 @@ use serde::Serialize;
 
 use super::context::{context_from_env, resolve, ContextError};
 use super::messages::{
-    DiagnosticArray, EmpoweredReward, Empowerment, LaserScan, MarkerArray, Odometry, PoseStamped,
-    RosMessage,
+    ros_type_of_dds, DiagnosticArray, EmpoweredReward, Empowerment, LaserScan, MarkerArray,
+    Odometry, PoseStamped, RosMessage,
 };
 use super::yaml::{self, to_yaml};
 use crate::excerpt::excerpt;
@@ -261,16 +261,6 @@ impl EchoType {
             .ok_or(EchoTypeError::Unknown(canonical))
     }
 
-    /// The ROS name of a DDS type name (`pkg::msg::dds_::Name_` → `pkg/msg/Name`), if it is one.
-    pub fn ros_name_of_dds(dds: &str) -> Option<String> {
-        match dds.split("::").collect::<Vec<_>>()[..] {
-            [package, prefix, "dds_", kind] => {
-                Some(format!("{package}/{prefix}/{}", kind.strip_suffix('_')?))
-            }
-            _ => None,
-        }
-    }
-
     fn known_list() -> String {
         Self::ALL.map(EchoType::name).join(", ")
     }
@@ -311,7 +301,7 @@ fn publishers(context: &Context, topic: &str) -> Publishers {
         if matches!(data.reliability, Some(Reliability::Reliable { .. })) {
             found.reliable += 1;
         }
-        let name = EchoType::ros_name_of_dds(&data.type_name).unwrap_or(data.type_name.clone());
+        let name = ros_type_of_dds(&data.type_name).unwrap_or(data.type_name.clone());
         if !found.types.contains(&name) {
             found.types.push(name);
         }
@@ -601,11 +591,11 @@ mod tests {
     fn every_type_round_trips_through_its_dds_name() {
         for kind in EchoType::ALL {
             let dds = kind.type_name().dds_msg_type();
-            let ros = EchoType::ros_name_of_dds(&dds).unwrap();
+            let ros = ros_type_of_dds(&dds).unwrap();
             assert_eq!(ros, kind.name());
             assert_eq!(EchoType::parse(&ros), Ok(kind));
         }
-        assert_eq!(EchoType::ros_name_of_dds("std_msgs::msg::String"), None);
+        assert_eq!(ros_type_of_dds("std_msgs::msg::String"), None);
     }
 
     #[test]

@@ -530,6 +530,11 @@ pub trait RosMessage: ros2_client::Message {
     fn ros_type() -> String {
         format!("{}/msg/{}", Self::PACKAGE, Self::NAME)
     }
+
+    /// The type's name on DDS (`nav_msgs::msg::dds_::Odometry_`), as discovery reports it.
+    fn dds_type() -> String {
+        Self::type_name().dds_msg_type()
+    }
 }
 
 /// A service cstep serves, with its ROS type name (`package/srv/Name`) given once.
@@ -551,6 +556,22 @@ pub trait RosService {
     /// The type as ROS tools print it (`cstep_msgs/srv/Evaluate`), for messages to the user.
     fn ros_type() -> String {
         format!("{}/srv/{}", Self::PACKAGE, Self::NAME)
+    }
+
+    /// The DDS type of the service's replies (`cstep_msgs::srv::dds_::Evaluate_Response_`), as
+    /// discovery reports its servers' reply writers (the rmw naming, which ros2-client follows).
+    fn dds_response_type() -> String {
+        format!("{}::srv::dds_::{}_Response_", Self::PACKAGE, Self::NAME)
+    }
+}
+
+/// The ROS name of a DDS type name (`pkg::msg::dds_::Name_` → `pkg/msg/Name`), if it is one.
+pub fn ros_type_of_dds(dds: &str) -> Option<String> {
+    match dds.split("::").collect::<Vec<_>>()[..] {
+        [package, prefix, "dds_", kind] => {
+            Some(format!("{package}/{prefix}/{}", kind.strip_suffix('_')?))
+        }
+        _ => None,
     }
 }
 

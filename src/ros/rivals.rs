@@ -23,6 +23,8 @@
 use std::collections::BTreeSet;
 use std::time::Duration;
 
+use super::messages::{ros_type_of_dds, RosMessage, RosService};
+
 /// How long after its start a node that finds a rival of unknown age refuses to go on (exits
 /// 1). Discovery between two processes on localhost takes 1–2 s, occasionally 4 s; on a loaded
 /// machine more.
@@ -61,11 +63,36 @@ pub const CHECK_PERIOD: Duration = Duration::from_millis(250);
 
 /// The DDS topics whose writers should all be this node's: `rt/<topic>` for a published topic,
 /// `rr/<service>Reply` for a served service (the ROS 2 name mangling, as ros2-client and rmw
-/// use it), each with the ROS name it stands for.
+/// use it), each with the type this node writes there.
 #[derive(Debug, Clone, Default)]
 pub struct Claims {
-    /// (DDS topic name, what it is in ROS terms, for messages).
-    topics: Vec<(String, String)>,
+    claims: Vec<Claim>,
+}
+
+/// One DDS topic this node alone should write.
+#[derive(Debug, Clone)]
+struct Claim {
+    /// The DDS topic, `rt/<topic>` or `rr/<service>Reply`.
+    dds_topic: String,
+    /// The DDS type this node writes there.
+    dds_type: String,
+    /// The topic's or service's ROS name.
+    ros_name: String,
+    /// Its ROS type, as ROS tools print it.
+    ros_type: String,
+    /// What the node does there, in ROS terms, for messages ("publishes /cstep/empowerment").
+    what: String,
+}
+
+/// A writer or reader of another participant, as DDS discovery reports it.
+#[derive(Debug, Clone)]
+pub struct Endpoint<'a> {
+    /// Its DDS topic name.
+    pub topic: &'a str,
+    /// Its DDS type name.
+    pub type_name: &'a str,
+    /// Its participant.
+    pub participant: Participant,
 }
 
 impl Claims {
@@ -74,57 +101,124 @@ impl Claims {
         Self::default()
     }
 
-    /// Claims the absolute ROS topic `name` (this node publishes it).
-    pub fn topic(mut self, name: &str) -> Self {
-        self.topics
-            .push((format!("rt{name}"), format!("publishes {name}")));
+    /// Claims the absolute ROS topic `name` (this node publishes `M` there).
+    pub fn topic<M: RosMessage>(mut self, name: &str) -> Self {
+        self.claims.push(Claim {
+            dds_topic: format!("rt{name}"),
+            dds_type: M::dds_type(),
+            ros_name: name.to_owned(),
+            ros_type: M::ros_type(),
+            what: format!("publishes {name}"),
+        });
         self
     }
 
-    /// Claims the absolute ROS service `name` (this node serves it): its reply topic.
-    pub fn service(mut self, name: &str) -> Self {
-        self.topics
-            .push((format!("rr{name}Reply"), format!("serves {name}")));
+    /// Claims the absolute ROS service `name` (this node serves `S` there): its reply topic.
+    pub fn service<S: RosService>(mut self, name: &str) -> Self {
+        self.claims.push(Claim {
+            dds_topic: format!("rr{name}Reply"),
+            dds_type: S::dds_response_type(),
+            ros_name: name.to_owned(),
+            ros_type: S::ros_type(),
+            what: format!("serves {name}"),
+        });
         self
     }
 
-    /// The rivals among discovered writers, each given as its DDS topic name and its
-    /// participant; `own` is this node's participant, whose writers are not rivals. One
-    /// [`Rival`] per participant, naming every claim it infringes, in order.
+    /// The rivals among discovered `writers`: writers of the type this node writes on a topic
+    /// it claims; `own` is this node's participant, whose writers are not rivals. One [`Rival`]
+    /// per participant, naming every claim it infringes, in order.
     pub fn rivals<'a>(
         &self,
-        writers: impl IntoIterator<Item = (&'a str, Participant)>,
+        writers: impl IntoIterator<Item = Endpoint<'a>>,
         own: &Participant,
     ) -> Vec<Rival> {
         let mut found: Vec<Rival> = Vec::new();
         let mut seen = BTreeSet::new();
-        for (topic, participant) in writers {
-            if participant.id == own.id {
+        for writer in writers {
+            if writer.participant.id == own.id {
                 continue;
             }
-            let Some((_, what)) = self.topics.iter().find(|(dds, _)| dds == topic) else {
+            let Some(claim) = self
+                .claims
+                .iter()
+                .find(|c| c.dds_topic == writer.topic && c.dds_type == writer.type_name)
+            else {
                 continue;
             };
-            if !seen.insert((participant.id.clone(), what.clone())) {
+            if !seen.insert((writer.participant.id.clone(), claim.what.clone())) {
                 continue;
             }
-            match found.iter_mut().find(|r| r.participant == participant) {
-                Some(rival) => rival.claims.push(what.clone()),
+            match found
+                .iter_mut()
+                .find(|r| r.participant == writer.participant)
+            {
+                Some(rival) => rival.claims.push(claim.what.clone()),
                 None => found.push(Rival {
-                    participant,
-                    claims: vec![what.clone()],
+                    participant: writer.participant,
+                    claims: vec![claim.what.clone()],
                 }),
             }
         }
         for rival in &mut found {
             rival.claims.sort_by_key(|what| {
-                self.topics
+                self.claims
                     .iter()
-                    .position(|(_, w)| w == what)
+                    .position(|c| &c.what == what)
                     .unwrap_or(usize::MAX)
             });
         }
         found
+    }
+
+    /// The claimed topics that other participants' `endpoints` (writers and readers) use with
+    /// another type — an output remapped onto a topic in use, say `/rosout`: DDS matches
+    /// nobody across the two types, so neither side hears the other. One line per claim and
+    /// foreign type, in the claims' order.
+    pub fn clashes<'a>(
+        &self,
+        endpoints: impl IntoIterator<Item = Endpoint<'a>>,
+        own: &Participant,
+    ) -> Vec<String> {
+        let mut found: Vec<(usize, String, String)> = Vec::new();
+        for endpoint in endpoints {
+            if endpoint.participant.id == own.id {
+                continue;
+            }
+            let Some(index) = self
+                .claims
+                .iter()
+                .position(|c| c.dds_topic == endpoint.topic && c.dds_type != endpoint.type_name)
+            else {
+                continue;
+            };
+            if !found
+                .iter()
+                .any(|(i, theirs, _)| *i == index && theirs == endpoint.type_name)
+            {
+                found.push((
+                    index,
+                    endpoint.type_name.to_owned(),
+                    endpoint.participant.id.clone(),
+                ));
+            }
+        }
+        found.sort_by_key(|(index, _, _)| *index);
+        found
+            .into_iter()
+            .map(|(index, theirs, participant)| {
+                let claim = &self.claims[index];
+                let theirs = ros_type_of_dds(&theirs)
+                    .map(|t| t.strip_suffix("_Response").map_or(t.clone(), str::to_owned))
+                    .unwrap_or(theirs);
+                format!(
+                    "{} is in use as {theirs} (participant {participant}, and perhaps others), \
+                     but this node {} as {}: the two types never match, so neither side hears \
+                     the other (check the remapping)",
+                    claim.ros_name, claim.what, claim.ros_type
+                )
+            })
+            .collect()
     }
 }
 
@@ -197,14 +291,30 @@ pub fn verdict(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::ros::messages::{EmpoweredReward, Empowerment, Evaluate, EvaluateBatch};
 
     fn claims() -> Claims {
         Claims::new()
-            .topic("/cstep/empowerment")
-            .topic("/cstep/reward")
-            .service("/cstep/evaluate")
-            .service("/cstep/evaluate_batch")
+            .topic::<Empowerment>("/cstep/empowerment")
+            .topic::<EmpoweredReward>("/cstep/reward")
+            .service::<Evaluate>("/cstep/evaluate")
+            .service::<EvaluateBatch>("/cstep/evaluate_batch")
     }
+
+    /// Endpoints from (DDS topic, DDS type, participant id).
+    fn endpoints<'a>(
+        list: &'a [(&'a str, &'a str, &'a str)],
+    ) -> impl Iterator<Item = Endpoint<'a>> + 'a {
+        list.iter().map(|(topic, type_name, id)| Endpoint {
+            topic,
+            type_name,
+            participant: participant(id, None),
+        })
+    }
+
+    const EMPOWERMENT: &str = "cstep_msgs::msg::dds_::Empowerment_";
+    const REWARD: &str = "cstep_msgs::msg::dds_::EmpoweredReward_";
+    const EVALUATE_REPLY: &str = "cstep_msgs::srv::dds_::Evaluate_Response_";
 
     fn participant(id: &str, created_ms: Option<u64>) -> Participant {
         Participant {
@@ -223,19 +333,25 @@ mod tests {
     #[test]
     fn writers_of_other_participants_on_claimed_topics_are_rivals() {
         let writers = [
-            ("rt/cstep/empowerment", "aa"),
-            ("rr/cstep/evaluateReply", "bb"),
-            ("rt/cstep/reward", "bb"),
-            ("rr/cstep/evaluateReply", "bb"), // a second server in one participant
-            ("rt/cstep/empowerment", "own"),
-            ("rt/diagnostics", "cc"),
-            ("rq/cstep/evaluateRequest", "dd"), // a client, not a server
-            ("rt/cstep/empowerment_other", "ee"),
+            ("rt/cstep/empowerment", EMPOWERMENT, "aa"),
+            ("rr/cstep/evaluateReply", EVALUATE_REPLY, "bb"),
+            ("rt/cstep/reward", REWARD, "bb"),
+            ("rr/cstep/evaluateReply", EVALUATE_REPLY, "bb"), // a second server in one participant
+            ("rt/cstep/empowerment", EMPOWERMENT, "own"),
+            (
+                "rt/diagnostics",
+                "diagnostic_msgs::msg::dds_::DiagnosticArray_",
+                "cc",
+            ),
+            (
+                "rq/cstep/evaluateRequest",
+                "cstep_msgs::srv::dds_::Evaluate_Request_",
+                "dd",
+            ),
+            ("rt/cstep/empowerment_other", EMPOWERMENT, "ee"),
+            ("rt/cstep/reward", "std_msgs::msg::dds_::Float64_", "ff"), // another type
         ];
-        let rivals = claims().rivals(
-            writers.iter().map(|(t, p)| (*t, participant(p, None))),
-            &participant("own", None),
-        );
+        let rivals = claims().rivals(endpoints(&writers), &participant("own", None));
         assert_eq!(
             rivals,
             [
@@ -344,5 +460,51 @@ mod tests {
             verdict(&sees(&far), &own, Duration::ZERO, "/n", 7),
             Verdict::Refuse(_)
         ));
+    }
+
+    /// `-r cstep/empowerment:=/rosout`: before the type was compared, every node's `/rosout`
+    /// writer read as a rival publishing the node's scores, and the node quit blaming them.
+    #[test]
+    fn a_claimed_topic_in_use_with_another_type_is_a_clash_not_a_rival() {
+        let claims = Claims::new()
+            .topic::<Empowerment>("/rosout")
+            .service::<Evaluate>("/cstep/evaluate");
+        let graph = [
+            ("rt/rosout", "rcl_interfaces::msg::dds_::Log_", "aa"),
+            ("rt/rosout", "rcl_interfaces::msg::dds_::Log_", "bb"),
+            ("rt/rosout", EMPOWERMENT, "own"),
+            (
+                "rr/cstep/evaluateReply",
+                "example_interfaces::srv::dds_::AddTwoInts_Response_",
+                "cc",
+            ),
+            ("rr/cstep/evaluateReply", EVALUATE_REPLY, "dd"),
+            ("rt/cstep/other", "std_msgs::msg::dds_::String_", "ee"),
+        ];
+        let own = participant("own", None);
+        let rivals = claims.rivals(endpoints(&graph), &own);
+        assert_eq!(rivals.len(), 1, "{rivals:?}");
+        assert_eq!(
+            rivals[0].describe(),
+            "participant dd also serves /cstep/evaluate"
+        );
+        let clashes = claims.clashes(endpoints(&graph), &own);
+        assert_eq!(clashes.len(), 2, "{clashes:?}");
+        for (line, parts) in clashes.iter().zip([
+            [
+                "/rosout is in use as rcl_interfaces/msg/Log (participant aa",
+                "this node publishes /rosout as cstep_msgs/msg/Empowerment",
+            ],
+            [
+                "/cstep/evaluate is in use as example_interfaces/srv/AddTwoInts (participant cc",
+                "serves /cstep/evaluate as cstep_msgs/srv/Evaluate",
+            ],
+        ]) {
+            assert!(!line.contains('\n'), "{line}");
+            for part in parts {
+                assert!(line.contains(part), "{part}: {line}");
+            }
+        }
+        assert!(claims.clashes(endpoints(&graph[2..3]), &own).is_empty());
     }
 }

@@ -2,7 +2,9 @@
 answers silently. A second `cstep node` refuses to start beside one that already serves its
 names; a node that sees another start serving its names later says so loudly (diagnostics ERROR)
 for as long as it does; the bridge takes a private domain nobody is on, and refuses a service
-that two nodes serve. Real nodes, real rclpy, real DDS, localhost only, a domain per test."""
+that two nodes serve. An output remapped onto a topic in use with another type is no rival but a
+clash, warned about with both types named. Real nodes, real rclpy, real DDS, localhost only, a
+domain per test."""
 
 import subprocess
 import time
@@ -124,6 +126,41 @@ def test_a_node_says_so_while_another_serves_its_service(rig, start_peer):
         rig.executor,
         timeout=3 * DISCOVERY_TIMEOUT_S,
     )
+
+
+def test_an_output_remapped_onto_a_topic_of_another_type_is_warned_about(
+    ros_context, executor, tmp_path
+):
+    """``-r cstep/empowerment:=/rosout``: before the node compared types, the test node's
+    ``/rosout`` writer (rcl_interfaces/msg/Log) read as a rival publishing the scores, and the
+    node quit with "another node is already answering … publishes /rosout"."""
+    node = Node("cstep_test_logger", context=ros_context)  # writes /rosout, as every rclpy node
+    executor.add_node(node)
+    log = tmp_path / "node.log"
+    with log.open("w") as err:
+        cstep = subprocess.Popen(
+            [str(cstep_binary()), "node", "--config", str(CONFIG), "--ros-args"]
+            + ["-r", "cstep/empowerment:=/rosout"],
+            stdout=subprocess.DEVNULL,
+            stderr=err,
+        )
+    try:
+        wait_until(
+            lambda: "/rosout is in use as rcl_interfaces/msg/Log" in log.read_text()
+            or cstep.poll() is not None,
+            "the node's warning about /rosout",
+            executor,
+            timeout=3 * DISCOVERY_TIMEOUT_S,
+        )
+        spin(executor, 2.0)
+        assert cstep.poll() is None, log.read_text()
+        (line,) = [x for x in log.read_text().splitlines() if "/rosout is in use" in x]
+        assert "publishes /rosout as cstep_msgs/msg/Empowerment" in line, line
+        assert "another node is already answering" not in log.read_text()
+    finally:
+        cstep.terminate()
+        cstep.wait(timeout=10)
+        node.destroy_node()
 
 
 def test_the_bridge_takes_a_domain_nobody_is_on(

@@ -28,6 +28,11 @@ impl Shared {
                 DiagnosticStatus::ERROR,
                 jump.map_or_else(|| rival.clone(), |jump| format!("{rival}; {jump}")),
             )
+        } else if let Some(clash) = &latest.clash {
+            (
+                DiagnosticStatus::WARN,
+                jump.map_or_else(|| clash.clone(), |jump| format!("{clash}; {jump}")),
+            )
         } else if !fresh(odom_age) || !fresh(scan_age) {
             let stale = "inputs stale: no score";
             (

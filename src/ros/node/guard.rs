@@ -2,9 +2,10 @@
 
 use std::time::Instant;
 
+use ros2_client::dds::rustdds::discovery::DiscoveredWriterData;
 use ros2_client::dds::rustdds::{RTPSEntity, GUID};
 
-use crate::ros::rivals::{self, Claims, Participant, Verdict};
+use crate::ros::rivals::{self, Claims, Endpoint, Participant, Verdict};
 
 /// Watches DDS discovery for another participant answering under this node's names
 /// ([`crate::ros::rivals`]).
@@ -22,15 +23,7 @@ impl Guard {
     pub(super) fn check(&self) -> Verdict {
         let own = participant(self.participant.guid());
         let writers = self.participant.discovered_writers();
-        let rivals = self.claims.rivals(
-            writers.iter().map(|w| {
-                (
-                    w.publication_topic_data.topic_name.as_str(),
-                    participant(w.writer_proxy.remote_writer_guid),
-                )
-            }),
-            &own,
-        );
+        let rivals = self.claims.rivals(writer_endpoints(&writers), &own);
         rivals::verdict(
             &rivals,
             &own,
@@ -39,6 +32,30 @@ impl Guard {
             self.domain,
         )
     }
+
+    /// The claimed topics the graph uses with another type ([`Claims::clashes`]), in one line;
+    /// None while there are none.
+    pub(super) fn clash(&self) -> Option<String> {
+        let own = participant(self.participant.guid());
+        let writers = self.participant.discovered_writers();
+        let readers = self.participant.discovered_readers();
+        let endpoints = writer_endpoints(&writers).chain(readers.iter().map(|r| Endpoint {
+            topic: r.subscription_topic_data.topic_name.as_str(),
+            type_name: r.subscription_topic_data.type_name().as_str(),
+            participant: participant(r.reader_proxy.remote_reader_guid),
+        }));
+        let lines = self.claims.clashes(endpoints, &own);
+        (!lines.is_empty()).then(|| lines.join("; "))
+    }
+}
+
+/// Discovered writers as [`Endpoint`]s.
+fn writer_endpoints(writers: &[DiscoveredWriterData]) -> impl Iterator<Item = Endpoint<'_>> {
+    writers.iter().map(|w| Endpoint {
+        topic: w.publication_topic_data.topic_name.as_str(),
+        type_name: w.publication_topic_data.type_name.as_str(),
+        participant: participant(w.writer_proxy.remote_writer_guid),
+    })
 }
 
 /// The participant of an entity's GUID, with its creation time where the GUID's prefix carries

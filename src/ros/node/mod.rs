@@ -38,6 +38,7 @@ use tracing::info;
 use super::args::RosArgs;
 use super::context::context_from_env;
 use super::logging;
+use super::messages::{EmpoweredReward, Empowerment, Evaluate, EvaluateBatch};
 use super::rivals::Claims;
 use crate::config::DEFAULT_NODE_NAME;
 use crate::estimator::{robot_name, Estimator};
@@ -105,10 +106,10 @@ pub fn run(config: &[PathBuf], ros_args: &RosArgs, stop: Arc<AtomicBool>) -> Res
     let ports = Ports::open(&mut node, &names)?;
     let guard = Guard {
         claims: Claims::new()
-            .topic(&names.empowerment)
-            .topic(&names.reward)
-            .service(&names.evaluate)
-            .service(&names.evaluate_batch),
+            .topic::<Empowerment>(&names.empowerment)
+            .topic::<EmpoweredReward>(&names.reward)
+            .service::<Evaluate>(&names.evaluate)
+            .service::<EvaluateBatch>(&names.evaluate_batch),
         participant: context.domain_participant(),
         started: Instant::now(),
         node: node.fully_qualified_name(),

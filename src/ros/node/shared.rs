@@ -69,6 +69,9 @@ pub(super) struct Latest {
     /// Another participant answering under this node's names, found after the start-up window:
     /// the warning, while it lasts (diagnostics are ERROR meanwhile).
     pub(super) rival: Option<String>,
+    /// Topics this node writes that the graph uses with another type (a remapping onto a topic
+    /// in use): the warning, while it lasts (diagnostics are WARN meanwhile).
+    pub(super) clash: Option<String>,
     /// Another participant answering under this node's names, found at start: why the node
     /// stopped.
     pub(super) refusal: Option<String>,

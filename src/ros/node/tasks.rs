@@ -115,7 +115,14 @@ pub(super) async fn serve(
         loop {
             smol::Timer::after(rivals::CHECK_PERIOD).await;
             let verdict = guard.check();
+            let clash = guard.clash();
             let mut latest = shared.latest();
+            if clash != latest.clash {
+                if let Some(line) = &clash {
+                    warn!("{line}");
+                }
+                latest.clash = clash;
+            }
             match verdict {
                 Verdict::Alone => latest.rival = None,
                 Verdict::Refuse(line) => {

@@ -30,7 +30,7 @@ pub struct JsonError {
 
 /// The message `T` that the JSON `text` holds, read strictly (see the module's documentation).
 pub fn from_json<T: DeserializeOwned>(text: &str) -> Result<T, JsonError> {
-    let value: Value = serde_json::from_str(text).map_err(|e| JsonError {
+    let UniqueKeys(value) = serde_json::from_str(text).map_err(|e| JsonError {
         path: String::new(),
         message: e.to_string(),
     })?;
@@ -42,6 +42,81 @@ pub fn from_json<T: DeserializeOwned>(text: &str) -> Result<T, JsonError> {
         path: misfit.path.unwrap_or_default(),
         message: misfit.message,
     })
+}
+
+/// A JSON value whose objects name each key once. serde_json's [`Value`] keeps the last of two
+/// equal keys, so `{"x": 1, "x": 2}` would be read as `x = 2` without a word; this refuses it
+/// with serde_json's line and column (its own `Value` visitor has no hook for that).
+struct UniqueKeys(Value);
+
+impl<'de> de::Deserialize<'de> for UniqueKeys {
+    fn deserialize<D: de::Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        deserializer
+            .deserialize_any(UniqueKeysVisitor)
+            .map(UniqueKeys)
+    }
+}
+
+/// Builds a [`Value`] as serde_json's does, refusing a key an object already has.
+struct UniqueKeysVisitor;
+
+impl<'de> Visitor<'de> for UniqueKeysVisitor {
+    type Value = Value;
+
+    fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+        f.write_str("a JSON value")
+    }
+
+    fn visit_bool<E>(self, v: bool) -> Result<Value, E> {
+        Ok(Value::Bool(v))
+    }
+
+    fn visit_i64<E>(self, v: i64) -> Result<Value, E> {
+        Ok(Value::from(v))
+    }
+
+    fn visit_u64<E>(self, v: u64) -> Result<Value, E> {
+        Ok(Value::from(v))
+    }
+
+    fn visit_f64<E>(self, v: f64) -> Result<Value, E> {
+        Ok(Value::from(v))
+    }
+
+    fn visit_str<E>(self, v: &str) -> Result<Value, E> {
+        Ok(Value::String(v.to_owned()))
+    }
+
+    fn visit_string<E>(self, v: String) -> Result<Value, E> {
+        Ok(Value::String(v))
+    }
+
+    fn visit_unit<E>(self) -> Result<Value, E> {
+        Ok(Value::Null)
+    }
+
+    fn visit_seq<A: SeqAccess<'de>>(self, mut seq: A) -> Result<Value, A::Error> {
+        let mut items = Vec::new();
+        while let Some(UniqueKeys(item)) = seq.next_element()? {
+            items.push(item);
+        }
+        Ok(Value::Array(items))
+    }
+
+    fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<Value, A::Error> {
+        let mut object = Map::new();
+        while let Some(key) = map.next_key::<String>()? {
+            if object.contains_key(&key) {
+                return Err(de::Error::custom(format_args!(
+                    "duplicate key `{}`",
+                    excerpt(&key)
+                )));
+            }
+            let UniqueKeys(value) = map.next_value()?;
+            object.insert(key, value);
+        }
+        Ok(Value::Object(object))
+    }
 }
 
 /// The deserializer's error: what is wrong, and where once the value at fault is known.
@@ -286,6 +361,24 @@ mod tests {
                 "k".repeat(80)
             )
         );
+    }
+
+    /// Before, the last of two equal keys won silently: this was a robot at x = 2.
+    #[test]
+    fn a_key_given_twice_is_refused_with_its_place() {
+        let error =
+            from_json::<Odometry>(r#"{"pose": {"pose": {"position": {"x": 1.0, "x": 2.0}}}}"#)
+                .unwrap_err();
+        assert!(error.message.contains("duplicate key `x`"), "{error}");
+        assert!(error.message.contains("line 1 column"), "{error}");
+        let error = from_json::<Odometry>(r#"{"pose": {}, "pose": {}}"#).unwrap_err();
+        assert!(error.message.contains("duplicate key `pose`"), "{error}");
+        // Equal keys in different objects are no duplicates.
+        let odom: Odometry = from_json(
+            r#"{"pose": {"pose": {"position": {"x": 1.0}, "orientation": {"x": 0.0, "w": 1.0}}}}"#,
+        )
+        .unwrap();
+        assert_eq!(odom.pose.pose.position.x, 1.0);
     }
 
     #[test]

@@ -128,6 +128,11 @@ impl<C: Clone + Eq + Hash, T> SharedQueue<C, T> {
         }
     }
 
+    /// The limits the queue holds its requests to.
+    pub fn limits(&self) -> Limits {
+        self.lock().limits
+    }
+
     fn lock(&self) -> std::sync::MutexGuard<'_, FairQueue<C, T>> {
         self.queue.lock().unwrap_or_else(|e| e.into_inner())
     }

@@ -1,6 +1,7 @@
 //! The node's DDS-side async tasks: taking inputs, answering the services, publishing
 //! diagnostics and watching for rivals.
 
+use std::cell::Cell;
 use std::sync::atomic::Ordering;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -194,25 +195,30 @@ pub(super) async fn queue_requests<Req, Resp>(
 
 /// Writes the answers the service worker (and the queue's refusals) hand over, each once its
 /// client's response reader is matched ([`wait_for_client`]), many at a time, so that a client
-/// not yet matched never holds up the others. A reply that cannot be written is counted and
-/// noted for diagnostics.
+/// not yet matched never holds up the others. At most `service_queue_total` replies wait at once
+/// ([`WaitingReplies`]). A reply that cannot be written is counted and noted for diagnostics.
 async fn send_replies(
     shared: &Shared,
     ports: &Ports,
     node: &Node,
     replies: &smol::channel::Receiver<Reply>,
 ) {
+    let waiting = &WaitingReplies::new(shared.requests.limits().total);
     replies
         .clone()
         .for_each_concurrent(None, |reply| async move {
             let (id, result, name) = match reply {
                 Reply::Evaluate(id, response) => {
-                    wait_for_client(node, &ports.evaluate, &id).await;
+                    if let Some(_place) = waiting.enter() {
+                        wait_for_client(node, &ports.evaluate, &id).await;
+                    }
                     let sent = ports.evaluate.async_send_response(id, response).await;
                     (id, sent, "evaluate")
                 }
                 Reply::Batch(id, response) => {
-                    wait_for_client(node, &ports.evaluate_batch, &id).await;
+                    if let Some(_place) = waiting.enter() {
+                        wait_for_client(node, &ports.evaluate_batch, &id).await;
+                    }
                     let sent = ports.evaluate_batch.async_send_response(id, response).await;
                     (id, sent, "evaluate_batch")
                 }
@@ -225,6 +231,43 @@ async fn send_replies(
             }
         })
         .await;
+}
+
+/// Places for replies waiting for their client's response reader ([`wait_for_client`]): as
+/// many as requests may wait to be served (`service_queue_total`), so that a flood of requests
+/// from clients the node never matches holds a bounded number of answers, each at most
+/// [`REPLY_MATCH_WAIT`]. A reply that finds no place is written at once, as a server without
+/// the wait writes it (a client matched by then gets it; one that is not, as before the wait).
+struct WaitingReplies {
+    waiting: Cell<usize>,
+    limit: usize,
+}
+
+impl WaitingReplies {
+    fn new(limit: usize) -> Self {
+        Self {
+            waiting: Cell::new(0),
+            limit,
+        }
+    }
+
+    /// A place to wait in, held until the guard drops; None when all `limit` are taken.
+    fn enter(&self) -> Option<WaitingPlace<'_>> {
+        let waiting = self.waiting.get();
+        (waiting < self.limit).then(|| {
+            self.waiting.set(waiting + 1);
+            WaitingPlace(&self.waiting)
+        })
+    }
+}
+
+/// One reply's place among the [`WaitingReplies`], given back when dropped.
+struct WaitingPlace<'a>(&'a Cell<usize>);
+
+impl Drop for WaitingPlace<'_> {
+    fn drop(&mut self) {
+        self.0.set(self.0.get() - 1);
+    }
 }
 
 /// Waits until `server`'s response writer has matched the response reader that the request
@@ -249,4 +292,25 @@ where
         smol::Timer::after(REPLY_MATCH_WAIT).await;
     })
     .await;
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn at_most_the_limit_of_replies_wait_and_a_place_comes_back_when_dropped() {
+        let waiting = WaitingReplies::new(2);
+        let first = waiting.enter();
+        let second = waiting.enter();
+        assert!(first.is_some() && second.is_some());
+        assert!(
+            waiting.enter().is_none(),
+            "a third reply is written at once"
+        );
+        drop(first);
+        assert!(waiting.enter().is_some(), "a place freed is taken again");
+        drop(second);
+        assert_eq!(waiting.waiting.get(), 0);
+    }
 }

@@ -146,8 +146,10 @@ def test_an_output_remapped_onto_a_topic_of_another_type_is_warned_about(
         )
     try:
         wait_until(
-            lambda: "/rosout is in use as rcl_interfaces/msg/Log" in log.read_text()
-            or cstep.poll() is not None,
+            lambda: (
+                "/rosout is in use as rcl_interfaces/msg/Log" in log.read_text()
+                or cstep.poll() is not None
+            ),
             "the node's warning about /rosout",
             executor,
             timeout=3 * DISCOVERY_TIMEOUT_S,

@@ -21,6 +21,8 @@
 //! 8. [`scoring`] — one step, state + scan + goal + `c` → estimate + reward, the one path every
 //!    front end (the node, its services, `cstep eval`) scores through.
 //!
+//! [`speed_limit`] maps a score to the speed limit Nav2 obeys (the node's optional output).
+//!
 //! [`parameters`] defines every parameter once (type, default, range, unit, description, live or
 //! read-only); [`config`] reads the node's `ros__parameters` YAML against it;
 //! [`input_file`] reads every file a user names, regular files of bounded size only, and
@@ -45,6 +47,7 @@ pub mod rollout;
 pub mod sampling;
 pub mod scene;
 pub mod scoring;
+pub mod speed_limit;
 pub mod state;
 pub mod suggest;
 pub mod volume;

@@ -101,6 +101,13 @@ fn descriptor(p: &Parameter) -> ParameterDescriptor {
                 to_value: f64::INFINITY,
                 step: 0.0,
             },
+            Rule::Between { min, max } if min.is_finite() || max.is_finite() => {
+                NumericRange::FloatingPointRange {
+                    from_value: min,
+                    to_value: max,
+                    step: 0.0,
+                }
+            }
             _ => NumericRange::NotSpecified,
         },
     }

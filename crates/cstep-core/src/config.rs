@@ -18,6 +18,7 @@ use crate::param_overrides::{OverridesError, ParamOverrides};
 pub use crate::parameters::BUILTIN_URDF_PATH;
 use crate::parameters::{self, Value as Typed, PARAMETERS};
 use crate::sampling::{Controls, SamplerKind, CONTROL_SAMPLE_BUDGET_BYTES};
+use crate::speed_limit::{SpeedLimitMapping, SpeedLimitOutput};
 use crate::volume::{EstimatorKind, VolumeDims};
 
 /// The node name whose parameters are read when none is given.
@@ -491,6 +492,10 @@ pub struct NodeSettings {
     pub reward_topic: String,
     /// `visualization_msgs/MarkerArray` output (published only while subscribed).
     pub markers_topic: String,
+    /// `nav2_msgs/SpeedLimit` output (with `publish_speed_limit`).
+    pub speed_limit_topic: String,
+    /// The speed limit's mapping and rate when `publish_speed_limit` is on; `None`: off.
+    pub speed_limit: Option<SpeedLimitOutput>,
     /// `cstep_msgs/srv/Evaluate` service.
     pub evaluate_service: String,
     /// `cstep_msgs/srv/EvaluateBatch` service: K states per call, scored in parallel.
@@ -522,6 +527,16 @@ impl NodeSettings {
             empowerment_topic: name("empowerment_topic"),
             reward_topic: name("reward_topic"),
             markers_topic: name("markers_topic"),
+            speed_limit_topic: name("speed_limit_topic"),
+            speed_limit: p.flag("publish_speed_limit").then(|| SpeedLimitOutput {
+                mapping: SpeedLimitMapping {
+                    full_speed_at: p.required_double("speed_limit_full_speed_at"),
+                    span: p.required_double("speed_limit_span"),
+                    floor: p.required_double("speed_limit_floor"),
+                    max_speed: p.double("speed_limit_max_speed"),
+                },
+                rate_hz: p.required_double("speed_limit_rate"),
+            }),
             evaluate_service: name("evaluate_service"),
             evaluate_batch_service: name("evaluate_batch_service"),
             service_queue_per_client: count(p.integer("service_queue_per_client")),
@@ -587,6 +602,40 @@ mod tests {
         assert_eq!(s.volume_dims, VolumeDims::Two);
         assert_eq!(s.robot_description, RobotSource::Builtin(BUILTIN_URDF_PATH));
         assert_eq!(s.robot_radius, None);
+    }
+
+    #[test]
+    fn the_speed_limit_is_off_by_default_and_read_whole_when_on() {
+        let (_, node, _) = load_all(&[], DEFAULT_NODE_NAME, &[]).unwrap();
+        assert_eq!(node.speed_limit, None);
+        assert_eq!(node.speed_limit_topic, "speed_limit");
+        let on = [
+            "publish_speed_limit:=true",
+            "speed_limit_floor:=5",
+            "speed_limit_max_speed:=0.8",
+        ]
+        .map(String::from);
+        let (_, node, _) = load_all(&[], DEFAULT_NODE_NAME, &on).unwrap();
+        let mapping = SpeedLimitMapping {
+            full_speed_at: 1.5,
+            span: 1.5,
+            floor: 5.0,
+            max_speed: Some(0.8),
+        };
+        assert_eq!(
+            node.speed_limit,
+            Some(SpeedLimitOutput {
+                mapping,
+                rate_hz: 10.0
+            })
+        );
+        let error = load_all(&[], DEFAULT_NODE_NAME, &["speed_limit_floor:=0".into()])
+            .unwrap_err()
+            .to_string();
+        assert!(
+            error.contains("'speed_limit_floor' must be a number in 1.0 to 100.0, got 0"),
+            "{error}"
+        );
     }
 
     #[test]

@@ -68,6 +68,13 @@ pub enum Rule {
     },
     /// Any finite number, or `.nan` (or null): unset.
     OptionalFinite,
+    /// A finite number in `min..=max`; an infinite bound leaves that side open.
+    Between {
+        /// The smallest accepted value.
+        min: f64,
+        /// The largest accepted value.
+        max: f64,
+    },
     /// One of these words.
     Choice(&'static [&'static str]),
     /// A ROS topic or service name: not empty, no spaces.
@@ -82,7 +89,7 @@ impl Rule {
         match self {
             Rule::Bool => Kind::Bool,
             Rule::Integer { .. } => Kind::Integer,
-            Rule::Positive { .. } | Rule::OptionalFinite => Kind::Double,
+            Rule::Positive { .. } | Rule::OptionalFinite | Rule::Between { .. } => Kind::Double,
             Rule::Choice(_) | Rule::RosName | Rule::Path => Kind::String,
         }
     }
@@ -96,6 +103,12 @@ impl Rule {
             Rule::Positive { optional: false } => "> 0".into(),
             Rule::Positive { optional: true } => "> 0, or .nan: unset".into(),
             Rule::OptionalFinite => "finite, or .nan: unset".into(),
+            Rule::Between { min, max } => match (min.is_finite(), max.is_finite()) {
+                (true, true) => format!("{min:?} to {max:?}"),
+                (true, false) => format!(">= {min:?}"),
+                (false, true) => format!("<= {max:?}"),
+                (false, false) => "finite".into(),
+            },
             Rule::Choice(words) => words.join(" | "),
             Rule::RosName => "a ROS name, no spaces".into(),
             Rule::Path => {
@@ -374,6 +387,86 @@ pub const PARAMETERS: &[Parameter] = &[
         change: Change::ReadOnly,
     },
     Parameter {
+        name: "publish_speed_limit",
+        rule: Rule::Bool,
+        default: "false",
+        unit: None,
+        description: "Publish a nav2_msgs/SpeedLimit on speed_limit_topic from each score \
+            (Nav2's controller server hands it to every controller plugin): 100 % at and above \
+            speed_limit_full_speed_at, speed_limit_floor at and below speed_limit_full_speed_at \
+            - speed_limit_span, linear between. At most speed_limit_rate per second, stamped \
+            with the scan's stamp; released (speed_limit 0.0, Nav2's \"no limit\") when no \
+            score came for input_timeout and when the node stops cleanly. While on, a subscriber \
+            of speed_limit_topic has scans scored like one of the scores.",
+        change: Change::ReadOnly,
+    },
+    Parameter {
+        name: "speed_limit_topic",
+        rule: Rule::RosName,
+        default: "speed_limit",
+        unit: None,
+        description: "nav2_msgs/SpeedLimit output (with publish_speed_limit); speed_limit is the \
+            topic Nav2's controller server reads (its speed_limit_topic parameter).",
+        change: Change::ReadOnly,
+    },
+    Parameter {
+        name: "speed_limit_full_speed_at",
+        rule: Rule::Between {
+            min: f64::NEG_INFINITY,
+            max: f64::INFINITY,
+        },
+        default: "1.5",
+        unit: Some("nats"),
+        description: "Empowerment at and above which the speed limit is 100 %. 1.5 nats: a \
+            free reachable area of e^1.5 = 4.5 m² within the horizon; the Crazyflie in the \
+            paper's arena scores 1.38 at 0.35 m from a wall and 1.86 in the open.",
+        change: Change::ReadOnly,
+    },
+    Parameter {
+        name: "speed_limit_span",
+        rule: Rule::Positive { optional: false },
+        default: "1.5",
+        unit: Some("nats"),
+        description: "Empowerment below speed_limit_full_speed_at over which the limit falls \
+            linearly to speed_limit_floor (1.5: the floor at 0 nats, a free reachable area of \
+            1 m²).",
+        change: Change::ReadOnly,
+    },
+    Parameter {
+        name: "speed_limit_floor",
+        rule: Rule::Between {
+            min: 1.0,
+            max: 100.0,
+        },
+        default: "20.0",
+        unit: Some("%"),
+        description: "The lowest speed limit, percent of full speed, however low the score \
+            (invalid scores and scores of a robot in collision included). Not below 1: Nav2 \
+            reads 0 as no limit at all.",
+        change: Change::ReadOnly,
+    },
+    Parameter {
+        name: "speed_limit_max_speed",
+        rule: Rule::Positive { optional: true },
+        default: ".nan",
+        unit: Some("m/s"),
+        description: ".nan: limits are percentages of each Nav2 controller's own maximum speed \
+            (percentage true). Set: absolute limits in m/s, the mapping's percentage of this \
+            speed (percentage false).",
+        change: Change::ReadOnly,
+    },
+    Parameter {
+        name: "speed_limit_rate",
+        rule: Rule::Positive { optional: false },
+        default: "10.0",
+        unit: Some("Hz"),
+        description: "At most this many speed limits per second of scan time (the scans' \
+            stamps): a score within 1/rate of the last limit published changes nothing, so a \
+            40 Hz LiDAR does not reconfigure Nav2's controllers 40 times a second. Releases are \
+            not held back.",
+        change: Change::ReadOnly,
+    },
+    Parameter {
         name: "evaluate_service",
         rule: Rule::RosName,
         default: "cstep/evaluate",
@@ -457,6 +550,9 @@ impl Parameter {
                 Rule::Positive { optional: false } if nan => Err(format!(
                     "'{name}' must be a positive number, got NaN (not finite)"
                 )),
+                Rule::Between { .. } if nan => {
+                    Err(format!("'{name}' must be a finite number, got NaN"))
+                }
                 _ => Err(format!(
                     "'{name}' must be set (the built-in default sets it; a file or -p cleared it)"
                 )),
@@ -488,7 +584,7 @@ impl Parameter {
                     show(other)
                 )),
             },
-            Rule::Positive { .. } | Rule::OptionalFinite => {
+            Rule::Positive { .. } | Rule::OptionalFinite | Rule::Between { .. } => {
                 let Yaml::Number(n) = value else {
                     return Err(format!("'{name}' must be a number, got {}", show(value)));
                 };
@@ -497,9 +593,13 @@ impl Parameter {
                     Rule::Positive { .. } if !(v.is_finite() && v > 0.0) => {
                         Err(format!("'{name}' must be a positive number, got {v}"))
                     }
-                    Rule::OptionalFinite if !v.is_finite() => {
+                    Rule::OptionalFinite | Rule::Between { .. } if !v.is_finite() => {
                         Err(format!("'{name}' must be a finite number, got {v}"))
                     }
+                    Rule::Between { min, max } if !(min..=max).contains(&v) => Err(format!(
+                        "'{name}' must be a number in {}, got {v}",
+                        self.rule.constraint()
+                    )),
                     _ => Ok(Some(Value::Double(v))),
                 }
             }
@@ -608,6 +708,10 @@ mod tests {
         assert_eq!(check("floor_height", "-1.5"), Ok(Some(Value::Double(-1.5))));
         assert_eq!(check("use_sim_time", "true"), Ok(Some(Value::Bool(true))));
         assert_eq!(
+            check("speed_limit_full_speed_at", "-2"),
+            Ok(Some(Value::Double(-2.0)))
+        );
+        assert_eq!(
             check("model", "point_mass"),
             Ok(Some(Value::Text("point_mass".into())))
         );
@@ -673,6 +777,21 @@ mod tests {
                 "scan_topic",
                 "'my scan'",
                 "'scan_topic' must be a ROS name without spaces, got \"my scan\"",
+            ),
+            (
+                "speed_limit_floor",
+                "100.5",
+                "'speed_limit_floor' must be a number in 1.0 to 100.0, got 100.5",
+            ),
+            (
+                "speed_limit_full_speed_at",
+                ".nan",
+                "'speed_limit_full_speed_at' must be a finite number, got NaN",
+            ),
+            (
+                "speed_limit_full_speed_at",
+                "-.inf",
+                "'speed_limit_full_speed_at' must be a finite number, got -inf",
             ),
             // A line break is escaped: an error stays one line (found by tests/yaml_fuzz.rs).
             (

@@ -37,6 +37,17 @@ impl<M: Serialize> Publisher<M> {
       .map_err(Into::into)
   }
 
+  /// cstep patch: waits until every matched reliable reader has acknowledged
+  /// everything written, at most `max_wait`; `Ok(true)` if they all did. For a
+  /// last message (a node's goodbye) that must not be lost when the writer
+  /// goes away.
+  pub fn wait_for_acknowledgments(&self, max_wait: std::time::Duration) -> WriteResult<bool, ()> {
+    self
+      .datawriter
+      .wait_for_acknowledgments(max_wait)
+      .map_err(Into::into)
+  }
+
   pub fn assert_liveliness(&self) -> WriteResult<(), ()> {
     self.datawriter.assert_liveliness().map_err(Into::into)
   }

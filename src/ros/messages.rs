@@ -504,6 +504,19 @@ pub struct MarkerArray {
     pub markers: Vec<Marker>,
 }
 
+/// `nav2_msgs/SpeedLimit`: the speed limit Nav2's controller server hands to every controller
+/// plugin, from the score ([`crate::speed_limit`]).
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct SpeedLimit {
+    /// The scan's stamp (a release: the node's clock), the odometry frame.
+    pub header: Header,
+    /// Whether `speed_limit` is a percentage of the controllers' maximum speed (else m/s).
+    pub percentage: bool,
+    /// The limit; 0.0 means no limit.
+    pub speed_limit: f64,
+}
+
 /// `rosgraph_msgs/Clock`: the simulation time on `/clock` (ros2-client's own `/clock` reader
 /// expects `builtin_interfaces/Time`, a type rclcpp and rclpy never publish there).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
@@ -603,6 +616,7 @@ ros_messages!(
     EmpoweredReward => "cstep_msgs" / "EmpoweredReward",
     DiagnosticArray => "diagnostic_msgs" / "DiagnosticArray",
     MarkerArray => "visualization_msgs" / "MarkerArray",
+    SpeedLimit => "nav2_msgs" / "SpeedLimit",
 );
 
 /// Every service here, with its request and response (which travel over DDS too).

@@ -25,6 +25,7 @@ mod queue;
 mod scoring;
 mod service;
 mod shared;
+mod speed_limit;
 mod tasks;
 
 use std::path::PathBuf;
@@ -33,7 +34,7 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use ros2_client::NodeName;
-use tracing::info;
+use tracing::{info, warn};
 
 use super::args::RosArgs;
 use super::context::context_from_env;
@@ -129,12 +130,26 @@ pub fn run(config: &[PathBuf], ros_args: &RosArgs, stop: Arc<AtomicBool>) -> Res
         names.evaluate_batch,
     );
 
+    if let Some((name, output)) = &names.speed_limit {
+        let m = output.mapping;
+        info!(
+            "speed limit on {name}: 100 % at empowerment >= {} nats, {} % at <= {} nats, at most \
+             {} per second of scan time{}",
+            m.full_speed_at,
+            m.floor,
+            m.full_speed_at - m.span,
+            output.rate_hz,
+            m.max_speed
+                .map_or_else(String::new, |v| format!(", in m/s of {v} m/s")),
+        );
+    }
     let worker = {
         let shared = shared.clone();
         let outputs = Outputs {
             empowerment: ports.empowerment.clone(),
             reward: ports.reward.clone(),
             markers: ports.markers.clone(),
+            speed_limit: ports.speed_limit.clone(),
         };
         std::thread::spawn(move || score_scans(&shared, &outputs))
     };
@@ -172,6 +187,12 @@ pub fn run(config: &[PathBuf], ros_args: &RosArgs, stop: Arc<AtomicBool>) -> Res
     service_worker
         .join()
         .map_err(|_| NodeError::ScoringThread)?;
+    // The scoring thread has ended: no limit can follow the release.
+    if let Some(limiter) = &ports.speed_limit {
+        if let Err(problem) = limiter.release_at_stop(clock.now(&node)) {
+            warn!("{problem}");
+        }
+    }
     if let Some(refusal) = shared.latest().refusal.take() {
         return Err(NodeError::Rival(refusal));
     }

@@ -14,8 +14,11 @@ use crate::ros::args::{NameKind, RosArgs};
 use crate::ros::messages::{
     Clock, DiagnosticArray, EmpoweredReward, Empowerment, Evaluate, EvaluateBatch,
     EvaluateBatchRequest, EvaluateBatchResponse, EvaluateRequest, EvaluateResponse, LaserScan,
-    MarkerArray, Odometry, PoseStamped, RosMessage, RosService,
+    MarkerArray, Odometry, PoseStamped, RosMessage, RosService, SpeedLimit,
 };
+use crate::speed_limit::SpeedLimitOutput;
+
+use super::speed_limit::SpeedLimiter;
 
 /// The node's topic and service names, fully qualified after namespace and remapping.
 pub(super) struct Names {
@@ -25,6 +28,8 @@ pub(super) struct Names {
     pub(super) empowerment: String,
     pub(super) reward: String,
     pub(super) markers: String,
+    /// The speed-limit output's name and settings, when `publish_speed_limit` is on.
+    pub(super) speed_limit: Option<(String, SpeedLimitOutput)>,
     pub(super) diagnostics: String,
     pub(super) clock: String,
     pub(super) evaluate: String,
@@ -53,6 +58,10 @@ impl Names {
             empowerment: topic(&interface.empowerment_topic)?,
             reward: topic(&interface.reward_topic)?,
             markers: topic(&interface.markers_topic)?,
+            speed_limit: match interface.speed_limit {
+                Some(output) => Some((topic(&interface.speed_limit_topic)?, output)),
+                None => None,
+            },
             diagnostics: topic("/diagnostics")?,
             clock: topic("/clock")?,
             evaluate: service(&interface.evaluate_service)?,
@@ -68,16 +77,27 @@ impl Names {
     /// own scores. Outputs are listed first, so an input remapped onto an output is named
     /// second.
     fn check_distinct(&self) -> Result<(), NodeError> {
-        let topics = [
-            Port::output::<Empowerment>(&self.empowerment, "empowerment"),
-            Port::output::<EmpoweredReward>(&self.reward, "reward"),
-            Port::output::<MarkerArray>(&self.markers, "markers"),
-            Port::output::<DiagnosticArray>(&self.diagnostics, "diagnostics"),
-            Port::input::<Odometry>(&self.odom, "odometry"),
-            Port::input::<LaserScan>(&self.scan, "scan"),
-            Port::input::<PoseStamped>(&self.goal, "goal"),
-            Port::input::<Clock>(&self.clock, "clock"),
-        ];
+        let speed_limit = self.speed_limit.as_ref();
+        let topics: Vec<Port> = [
+            Some(Port::output::<Empowerment>(
+                &self.empowerment,
+                "empowerment",
+            )),
+            Some(Port::output::<EmpoweredReward>(&self.reward, "reward")),
+            Some(Port::output::<MarkerArray>(&self.markers, "markers")),
+            speed_limit.map(|(name, _)| Port::output::<SpeedLimit>(name, "speed limit")),
+            Some(Port::output::<DiagnosticArray>(
+                &self.diagnostics,
+                "diagnostics",
+            )),
+            Some(Port::input::<Odometry>(&self.odom, "odometry")),
+            Some(Port::input::<LaserScan>(&self.scan, "scan")),
+            Some(Port::input::<PoseStamped>(&self.goal, "goal")),
+            Some(Port::input::<Clock>(&self.clock, "clock")),
+        ]
+        .into_iter()
+        .flatten()
+        .collect();
         for (i, first) in topics.iter().enumerate() {
             if let Some(second) = topics[i + 1..].iter().find(|p| p.name == first.name) {
                 return Err(NodeError::SharedName {
@@ -143,6 +163,8 @@ pub(super) struct Ports {
     pub(super) empowerment: Arc<Publisher<Empowerment>>,
     pub(super) reward: Arc<Publisher<EmpoweredReward>>,
     pub(super) markers: Arc<Publisher<MarkerArray>>,
+    /// The speed-limit output, when `publish_speed_limit` is on.
+    pub(super) speed_limit: Option<Arc<SpeedLimiter>>,
     pub(super) diagnostics: Publisher<DiagnosticArray>,
     pub(super) evaluate: Server<EvaluateRequest, EvaluateResponse>,
     pub(super) evaluate_batch: Server<EvaluateBatchRequest, EvaluateBatchResponse>,
@@ -173,6 +195,17 @@ impl Ports {
         let reward_topic = topic::<EmpoweredReward>(node, &names.reward, &reliable)?;
         let markers_topic = topic::<MarkerArray>(node, &names.markers, &reliable)?;
         let diagnostics_topic = topic::<DiagnosticArray>(node, &names.diagnostics, &reliable)?;
+        // Nav2's controller server subscribes with rclcpp::QoS(10): reliable, volatile.
+        let speed_limit = match &names.speed_limit {
+            Some((name, output)) => {
+                let speed_limit_topic = topic::<SpeedLimit>(node, name, &reliable)?;
+                let publisher = node
+                    .create_publisher(&speed_limit_topic, Some(reliable.clone()))
+                    .map_err(failed("the speed limit publisher"))?;
+                Some(Arc::new(SpeedLimiter::new(*output, publisher)))
+            }
+            None => None,
+        };
         let (evaluate_name, evaluate_type) = service::<Evaluate>(&names.evaluate)?;
         let (batch_name, batch_type) = service::<EvaluateBatch>(&names.evaluate_batch)?;
         Ok(Self {
@@ -200,6 +233,7 @@ impl Ports {
                 node.create_publisher(&markers_topic, Some(reliable.clone()))
                     .map_err(failed("the markers publisher"))?,
             ),
+            speed_limit,
             diagnostics: node
                 .create_publisher(&diagnostics_topic, Some(reliable.clone()))
                 .map_err(failed("the diagnostics publisher"))?,

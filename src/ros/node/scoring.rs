@@ -9,6 +9,7 @@ use ros2_client::Publisher;
 use tracing::debug;
 
 use super::shared::{PostedScan, Shared};
+use super::speed_limit::SpeedLimiter;
 use crate::ros::convert::{
     empowerment_message, goal_position, laser_scan_to_scan, odometry_to_state, reward_message,
 };
@@ -25,10 +26,12 @@ pub(super) struct Outputs {
     pub(super) empowerment: Arc<Publisher<Empowerment>>,
     pub(super) reward: Arc<Publisher<EmpoweredReward>>,
     pub(super) markers: Arc<Publisher<MarkerArray>>,
+    /// The speed-limit output, when `publish_speed_limit` is on.
+    pub(super) speed_limit: Option<Arc<SpeedLimiter>>,
 }
 
 /// The scoring thread: waits for a scan, scores it against the newest odometry, publishes the
-/// score, then the markers if someone subscribes to them.
+/// speed limit (if on) and the score, then the markers if someone subscribes to them.
 pub(super) fn score_scans(shared: &Shared, outputs: &Outputs) {
     loop {
         let PostedScan { scan, with_markers } = {
@@ -82,6 +85,11 @@ pub(super) fn score_scans(shared: &Shared, outputs: &Outputs) {
                     stamp.sec, stamp.nanosec, e.empowerment, e.valid, e.status
                 );
                 shared.scored(stamp, order);
+                if let Some(limiter) = &outputs.speed_limit {
+                    if let Err(problem) = limiter.scored(&e.header, e.empowerment) {
+                        shared.note_problem(|_| {}, &problem);
+                    }
+                }
                 // A full queue or a lost subscriber is not the node's failure; diagnostics show it.
                 if outputs.empowerment.publish(e).is_err() || outputs.reward.publish(r).is_err() {
                     shared.note_problem(|_| {}, "publishing a score failed");

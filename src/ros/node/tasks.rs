@@ -71,7 +71,8 @@ pub(super) async fn serve(
         };
         // Matched readers of our writers, as the spinner records DDS matching.
         let scores_wanted = ports.empowerment.get_subscription_count(node) > 0
-            || ports.reward.get_subscription_count(node) > 0;
+            || ports.reward.get_subscription_count(node) > 0
+            || ports.speed_limit.as_ref().is_some_and(|l| l.wanted(node));
         {
             let mut latest = shared.latest();
             latest.last_scan = Some(Instant::now());
@@ -139,6 +140,19 @@ pub(super) async fn serve(
             }
         }
     };
+    // Releases the speed limit when scores stop coming (every 50 ms: within input_timeout
+    // + 50 ms of the last score). Never ends when the output is off.
+    let speed_limit_watch = async {
+        let Some(limiter) = &ports.speed_limit else {
+            return futures::future::pending::<()>().await;
+        };
+        loop {
+            smol::Timer::after(Duration::from_millis(50)).await;
+            if let Err(problem) = limiter.release_if_stale(shared.timeout(), || clock.now(node)) {
+                shared.note_problem(|_| {}, &problem);
+            }
+        }
+    };
     let stopped = async {
         while !shared.stopping.load(Ordering::SeqCst) {
             smol::Timer::after(Duration::from_millis(50)).await;
@@ -154,6 +168,7 @@ pub(super) async fn serve(
         Box::pin(answers),
         Box::pin(diagnostics),
         Box::pin(rivals),
+        Box::pin(speed_limit_watch),
         Box::pin(stopped),
     ])
     .await;

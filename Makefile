@@ -51,10 +51,18 @@ test-rust:
 # ROS_DOMAIN_ID) against the release `cstep` binary. pytest exits 5 when it collects nothing;
 # that is a failure here too.
 TARGET_DIR := $(or $(CARGO_TARGET_DIR),target)
-test-python: $(MSGS_STAMP) $(SCORING_STAMP) $(COLCON_STAMP)
+# The test-only interface packages' build and install prefix (see $(NAV2_MSGS_STAMP) below).
+TEST_INTERFACES := $(abspath $(TARGET_DIR))/test-interfaces
+NAV2_MSGS_STAMP := $(TEST_INTERFACES)/.stamp-nav2_msgs
+NAV2_MSGS_SOURCES := $(sort $(wildcard tests/interfaces/nav2_msgs/package.xml \
+	tests/interfaces/nav2_msgs/CMakeLists.txt tests/interfaces/nav2_msgs/msg/*.msg))
+test-python: $(MSGS_STAMP) $(SCORING_STAMP) $(COLCON_STAMP) $(NAV2_MSGS_STAMP)
 	$(CARGO) build --release --quiet
 	$(VENV_ENV) CSTEP_BIN=$(abspath $(TARGET_DIR))/release/cstep \
-		CSTEP_COLCON_INSTALL=$(abspath $(COLCON_WS))/install $(VPY) -m pytest -q tests/python
+		CSTEP_COLCON_INSTALL=$(abspath $(COLCON_WS))/install \
+		CSTEP_TEST_INTERFACES=$(TEST_INTERFACES)/install \
+		LD_LIBRARY_PATH=$(TEST_INTERFACES)/install/lib$${LD_LIBRARY_PATH:+:$$LD_LIBRARY_PATH} \
+		$(VPY) -m pytest -q tests/python
 
 # Rewrites docs/parameters.md and config/cstep.yaml from the parameter table in
 # crates/cstep-core/src/parameters.rs (`make test` fails while they differ from it).
@@ -116,6 +124,24 @@ $(MSGS_STAMP): $(PY_STAMP) $(MSG_SOURCES) Makefile
 	@$(VENV_ENV) $(VPY) -c "from cstep_msgs.srv import Evaluate, EvaluateBatch; from cstep_msgs.msg import Empowerment, EmpoweredReward" \
 		|| { echo "cstep_msgs was built but does not import"; exit 1; }
 	@echo "==> cstep_msgs: ready (import cstep_msgs works)"
+	@touch $@
+
+# Test-only interface packages (tests/interfaces/): nav2_msgs with just SpeedLimit.msg, which
+# tests/python/test_speed_limit.py subscribes with as Nav2's controller server does (Nav2 has no
+# PyPI wheels). Built like cstep_msgs but installed into the cargo target directory, never into
+# the venv or a ROS workspace: the tests find it through CSTEP_TEST_INTERFACES and
+# LD_LIBRARY_PATH (test-python sets both).
+$(NAV2_MSGS_STAMP): $(PY_STAMP) $(NAV2_MSGS_SOURCES) Makefile
+	@echo "==> nav2_msgs (test-only): building into $(TEST_INTERFACES)/install (log: $(TEST_INTERFACES)/make.log)"
+	@mkdir -p $(TEST_INTERFACES)/build
+	@$(ROS_BUILD_ENV) $(VENV)/bin/cmake -S tests/interfaces/nav2_msgs -B $(TEST_INTERFACES)/build \
+		-DCMAKE_INSTALL_PREFIX=$(TEST_INTERFACES)/install -DPython3_EXECUTABLE=$(VENV_ABS)/bin/python \
+		-DBUILD_TESTING=OFF > $(TEST_INTERFACES)/make.log 2>&1 \
+		&& $(ROS_BUILD_ENV) $(VENV)/bin/cmake --build $(TEST_INTERFACES)/build -j 2 \
+			>> $(TEST_INTERFACES)/make.log 2>&1 \
+		&& $(ROS_BUILD_ENV) $(VENV)/bin/cmake --install $(TEST_INTERFACES)/build \
+			>> $(TEST_INTERFACES)/make.log 2>&1 \
+		|| { cat $(TEST_INTERFACES)/make.log; exit 1; }
 	@touch $@
 
 # The cstep_scoring extension (crates/cstep-py: PyO3 over the ROS-free core crates/cstep-core, no

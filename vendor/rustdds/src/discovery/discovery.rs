@@ -1763,7 +1763,8 @@ impl Discovery {
   }
 
   pub fn participant_cleanup(&self) {
-    let removed = discovery_db_write(&self.discovery_db).participant_cleanup();
+    let removed =
+      discovery_db_write(&self.discovery_db).participant_cleanup(Self::PARTICIPANT_CLEANUP_PERIOD);
     for (guid_prefix, reason) in removed {
       debug!("participant cleanup - timeout for {guid_prefix:?}");
       self.send_discovery_notification(DiscoveryNotificationType::ParticipantLost { guid_prefix });

@@ -1,7 +1,7 @@
 use std::{
   collections::BTreeMap,
   sync::{Arc, RwLock, RwLockReadGuard, RwLockWriteGuard},
-  time::Instant,
+  time::{Duration as StdDuration, Instant},
 };
 
 use chrono::Utc;
@@ -51,6 +51,9 @@ pub(crate) struct DiscoveryDB {
   my_guid: GUID,
   participant_proxies: BTreeMap<GuidPrefix, SpdpDiscoveredParticipantData>,
   participant_last_life_signs: BTreeMap<GuidPrefix, Instant>,
+  // cstep patch: when `participant_cleanup` last ran (at first, when this table
+  // was made), to tell our own stall from the peers' silence.
+  last_participant_cleanup: Instant,
 
   // Authentication statuses of participants
   #[cfg(feature = "security")]
@@ -129,6 +132,7 @@ impl DiscoveryDB {
       my_guid,
       participant_proxies: BTreeMap::new(),
       participant_last_life_signs: BTreeMap::new(),
+      last_participant_cleanup: Instant::now(),
       #[cfg(feature = "security")]
       authentication_statuses: BTreeMap::new(),
       local_topic_writers: BTreeMap::new(),
@@ -304,8 +308,25 @@ impl DiscoveryDB {
 
   // Delete participant proxies, if we have not heard of them within
   // lease_duration
-  pub fn participant_cleanup(&mut self) -> Vec<(GuidPrefix, LostReason)> {
+  //
+  // cstep patch: `period` is how often the caller runs this. A run that comes
+  // more than twice that late means this process did not run in between
+  // (stopped by SIGSTOP or a debugger, or starved): the peers' announcements of
+  // that time are still unread in the sockets, so their silence says nothing.
+  // The stall (the lateness beyond one period) is added to every peer's last
+  // life sign before leases are judged, so a peer expires for its own silence
+  // only, a lease after we run again at the earliest.
+  pub fn participant_cleanup(&mut self, period: StdDuration) -> Vec<(GuidPrefix, LostReason)> {
     let inow = Instant::now();
+    let since_last_run = inow.saturating_duration_since(self.last_participant_cleanup);
+    self.last_participant_cleanup = inow;
+    if since_last_run > 2 * period {
+      let stall = since_last_run - period;
+      info!("participant cleanup - ran {stall:?} late; not counted against peers' leases");
+      for last_life in self.participant_last_life_signs.values_mut() {
+        *last_life = (*last_life + stall).min(inow);
+      }
+    }
 
     let mut to_remove = Vec::new();
     // TODO: We are not cleaning up liast_life_signs table, but that should not be a
@@ -879,10 +900,41 @@ mod tests {
     assert_eq!(discoverydb.participant_proxies.len(), 1);
 
     std::thread::sleep(StdDuration::from_secs(2));
-    discoverydb.participant_cleanup();
+    discoverydb.participant_cleanup(StdDuration::from_secs(2));
     assert!(discoverydb.participant_proxies.is_empty());
 
     // TODO: more operations tests
+  }
+
+  #[test]
+  fn a_late_cleanup_does_not_count_its_own_stall_against_leases() {
+    let (discovery_db_event_sender, _discovery_db_event_receiver) =
+      std::sync::mpsc::sync_channel::<()>(4);
+    let (status_sender, _status_receiver) = sync_status_channel(16).unwrap();
+    let mut discoverydb = DiscoveryDB::new(
+      GUID::new_participant_guid(),
+      discovery_db_event_sender,
+      status_sender,
+    );
+    let mut data = spdp_participant_data().unwrap();
+    data.lease_duration = Some(Duration::from(StdDuration::from_secs(20)));
+    discoverydb.update_participant(&data);
+    let prefix = data.participant_guid.prefix;
+    let period = StdDuration::from_secs(2);
+    let now = Instant::now();
+
+    // Last heard of 30 s ago, but we ourselves were stopped for 29 of them.
+    discoverydb
+      .participant_last_life_signs
+      .insert(prefix, now - StdDuration::from_secs(30));
+    discoverydb.last_participant_cleanup = now - StdDuration::from_secs(29);
+    assert!(discoverydb.participant_cleanup(period).is_empty());
+
+    // Silent for 30 s while we ran on: its lease has expired.
+    discoverydb
+      .participant_last_life_signs
+      .insert(prefix, now - StdDuration::from_secs(30));
+    assert_eq!(discoverydb.participant_cleanup(period).len(), 1);
   }
 
   #[test]

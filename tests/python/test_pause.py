@@ -29,15 +29,7 @@ long_pauses = pytest.mark.skipif(
 )
 
 
-# Issue 45: on SIGCONT the node's own lease check drops every peer silent (to it) for longer than
-# its lease, and never rediscovers it.
-cut_off = pytest.mark.xfail(reason="issue 45: a pause over a peer's lease cuts it off", strict=True)
-
-
-@pytest.mark.parametrize(
-    "pause_s",
-    [5, pytest.param(30, marks=cut_off), pytest.param(120, marks=[long_pauses, cut_off])],
-)
+@pytest.mark.parametrize("pause_s", [5, 30, pytest.param(120, marks=long_pauses)])
 def test_the_peers_connected_before_a_pause_are_served_after_it(
     pause_s, cstep_node, ros_context, executor, record_property
 ):

@@ -19,33 +19,28 @@ pub(super) struct Guard {
 }
 
 impl Guard {
-    /// The verdict on the writers discovery has reported so far.
-    pub(super) fn check(&self) -> Verdict {
+    /// What discovery has reported so far, read once: the verdict on the writers, and the
+    /// claimed topics the graph uses with another type ([`Claims::clashes`]) in one line (None
+    /// while there are none).
+    pub(super) fn check(&self) -> (Verdict, Option<String>) {
         let own = participant(self.participant.guid());
         let writers = self.participant.discovered_writers();
+        let readers = self.participant.discovered_readers();
         let rivals = self.claims.rivals(writer_endpoints(&writers), &own);
-        rivals::verdict(
+        let verdict = rivals::verdict(
             &rivals,
             &own,
             self.started.elapsed(),
             &self.node,
             self.domain,
-        )
-    }
-
-    /// The claimed topics the graph uses with another type ([`Claims::clashes`]), in one line;
-    /// None while there are none.
-    pub(super) fn clash(&self) -> Option<String> {
-        let own = participant(self.participant.guid());
-        let writers = self.participant.discovered_writers();
-        let readers = self.participant.discovered_readers();
+        );
         let endpoints = writer_endpoints(&writers).chain(readers.iter().map(|r| Endpoint {
             topic: r.subscription_topic_data.topic_name.as_str(),
             type_name: r.subscription_topic_data.type_name().as_str(),
             participant: participant(r.reader_proxy.remote_reader_guid),
         }));
-        let lines = self.claims.clashes(endpoints, &own);
-        (!lines.is_empty()).then(|| lines.join("; "))
+        let clashes = self.claims.clashes(endpoints, &own);
+        (verdict, (!clashes.is_empty()).then(|| clashes.join("; ")))
     }
 }
 

@@ -116,8 +116,7 @@ pub(super) async fn serve(
     let rivals = async {
         loop {
             smol::Timer::after(rivals::CHECK_PERIOD).await;
-            let verdict = guard.check();
-            let clash = guard.clash();
+            let (verdict, clash) = guard.check();
             let mut latest = shared.latest();
             if clash != latest.clash {
                 if let Some(line) = &clash {

@@ -32,6 +32,7 @@
 //! [`scene`] and [`plot`] are the demo's simulated world and its plot.
 
 pub mod arena;
+pub mod cloud;
 pub mod config;
 pub mod estimator;
 pub mod excerpt;

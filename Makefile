@@ -65,7 +65,7 @@ test-python: $(MSGS_STAMP) $(SCORING_STAMP) $(COLCON_STAMP) $(NAV2_MSGS_STAMP)
 		$(VPY) -m pytest -q tests/python
 
 # Rewrites docs/parameters.md and config/cstep.yaml from the parameter table in
-# crates/cstep-core/src/parameters.rs (`make test` fails while they differ from it).
+# crates/cstep-core/src/parameters/table.rs (`make test` fails while they differ from it).
 parameter-docs:
 	CSTEP_WRITE_DOCS=1 $(CARGO) test --test parameter_docs
 

@@ -2,8 +2,8 @@
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 
-use cstep::config::{Settings, BUILTIN_HUSKY_PATH};
 use cstep::estimator::Estimator;
+use cstep::parameters::{Settings, BUILTIN_HUSKY_PATH};
 use cstep::scene::benchmark_case;
 
 fn evaluate(c: &mut Criterion) {

@@ -4,9 +4,9 @@
 //! callgrind as it is).
 use std::time::Instant;
 
-use cstep::config::Settings;
 use cstep::estimator::Estimator;
 use cstep::occupancy::Occupancy;
+use cstep::parameters::Settings;
 use cstep::scene::benchmark_case;
 
 fn main() {

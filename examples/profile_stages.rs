@@ -2,9 +2,9 @@
 //! stages of one evaluation on the benchmark scene (run under callgrind for a per-function view).
 use std::time::Instant;
 
-use cstep::config::Settings;
 use cstep::estimator::Estimator;
 use cstep::occupancy::Occupancy;
+use cstep::parameters::Settings;
 use cstep::scene::benchmark_case;
 
 fn main() {

@@ -11,9 +11,9 @@
 use std::f64::consts::{PI, TAU};
 use std::sync::OnceLock;
 
-use cstep::config::{Settings, DEFAULT_NODE_NAME};
 use cstep::estimator::Estimator;
 use cstep::input::{InputError, MAX_ANGULAR_RATE, MAX_BEAMS, MAX_COORDINATE, MAX_SPEED};
+use cstep::parameters::{Settings, DEFAULT_NODE_NAME};
 use cstep::ros::convert::{
     empowerment_message, goal_position, laser_scan_to_scan, odometry_to_state, reward_message,
 };

@@ -5,7 +5,7 @@
 
 use std::path::{Path, PathBuf};
 
-use cstep::config::{load_all, BUILTIN_URDF, DEFAULT_NODE_NAME};
+use cstep::parameters::{load_all, BUILTIN_URDF, DEFAULT_NODE_NAME};
 use cstep::parameters::{Change, Parameter, Value, BUILTIN_URDF_PATH, PARAMETERS};
 
 /// How to rewrite the files, said in every failure.
@@ -72,9 +72,10 @@ fn yaml_file() -> String {
         "# cstep — default parameters, in ROS 2 `ros__parameters` form.\n\
          # Load with `cstep node --config config/cstep.yaml` (or `--ros-args --params-file ...`);\n\
          # override one with `-p name:=value`. Relative paths are relative to this file.\n\
-         # Written from the table in src/parameters.rs by `make parameter-docs`: change a\n\
-         # parameter there, not here. Each one: what it means, then its type, unit, accepted\n\
-         # values and whether it can change while the node runs (live) or not (read-only).\n\
+         # Written from the table in crates/cstep-core/src/parameters/table.rs by\n\
+         # `make parameter-docs`: change a parameter there, not here. Each one: what it means,\n\
+         # then its type, unit, accepted values and whether it can change while the node runs\n\
+         # (live) or not (read-only).\n\
          # `/**` applies to every node, whatever its name and namespace (rcl's wildcard, as\n\
          # launch_ros writes it), so the file serves `-r __ns:=/drone1` and launch files as is.\n\
          /**:\n  ros__parameters:\n",
@@ -130,7 +131,7 @@ fn config_yaml_is_written_from_the_table() {
     let actual = std::fs::read_to_string(&path).unwrap();
     assert!(
         actual == expected,
-        "config/cstep.yaml differs from the table in cstep-core's parameters.rs; rewrite it with \
+        "config/cstep.yaml differs from the table in cstep-core's parameters/table.rs; rewrite it with \
          `{REWRITE}`. Expected:\n{expected}"
     );
 }
@@ -154,7 +155,7 @@ fn parameter_page_table_is_written_from_the_table() {
         assert!(
             current == expected,
             "{TABLE_PAGE}'s parameter table differs from the table in cstep-core's \
-             parameters.rs; rewrite it with `{REWRITE}`. Expected:\n{expected}"
+             parameters/table.rs; rewrite it with `{REWRITE}`. Expected:\n{expected}"
         );
     }
 }

@@ -5,12 +5,12 @@
 use std::path::Path;
 
 use approx::assert_relative_eq;
-use cstep::config::Settings;
 use cstep::estimator::Estimator;
 use cstep::model::diff_drive::{Bound, DiffDrive};
 use cstep::model::urdf::UrdfError;
 use cstep::model::wheeled::WheeledDescription;
 use cstep::model::Dynamics;
+use cstep::parameters::Settings;
 
 fn husky_text() -> String {
     std::fs::read_to_string("urdf/husky.urdf").unwrap()

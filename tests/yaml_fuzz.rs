@@ -1,7 +1,7 @@
 //! Adversarial parameters files: whatever a file under the input cap holds, it is read or refused
 //! within [`CASE_BOUND`], with a one-line error no longer than [`MAX_ERROR_BYTES`].
 //!
-//! Before `cstep::yaml_input` a file of 200 000 nested `[` (200 KB) took minutes to be refused,
+//! Before `cstep::parameters::yaml` a file of 200 000 nested `[` (200 KB) took minutes to be refused,
 //! and files of many sections, or of many parameters in one section, took time in the square
 //! of their size (a 15 MiB file 470 s); `%TAG` directives did too, and ten anchors of ten aliases
 //! each expand to 10¹⁰ values. The cases are drawn by proptest from recipes of those shapes —
@@ -20,8 +20,8 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
-use cstep::config::{load_all, DEFAULT_NODE_NAME};
 use cstep::input_file::MAX_INPUT_FILE_BYTES;
+use cstep::parameters::{load_all, DEFAULT_NODE_NAME};
 use proptest::prelude::*;
 use proptest::strategy::ValueTree;
 use proptest::test_runner::{Config, RngAlgorithm, TestRng, TestRunner};

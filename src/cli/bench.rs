@@ -7,8 +7,8 @@ use std::time::{Duration, Instant};
 
 use serde::Serialize;
 
-use cstep::config::{Settings, BUILTIN_HUSKY_PATH};
 use cstep::estimator::Estimator;
+use cstep::parameters::{Settings, BUILTIN_HUSKY_PATH};
 
 use super::{CliError, Format};
 

@@ -2,8 +2,8 @@
 //! they are, and the command line's own. Each prints as the one line `main` writes after
 //! `cstep: error: `, in the words the user has always read.
 
-use cstep::config::ConfigError;
 use cstep::model::urdf::UrdfError;
+use cstep::parameters::ConfigError;
 use cstep::ros::args::ArgsError;
 use cstep::ros::echo::EchoError;
 use cstep::ros::node::NodeError;

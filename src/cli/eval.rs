@@ -6,9 +6,9 @@ use nalgebra::Vector3;
 use serde::de::DeserializeOwned;
 use serde::Serialize;
 
-use cstep::config::{Settings, DEFAULT_NODE_NAME};
 use cstep::estimator::Estimator;
 use cstep::excerpt::excerpt;
+use cstep::parameters::{Settings, DEFAULT_NODE_NAME};
 use cstep::ros::convert::{
     empowerment_message, goal_position, laser_scan_to_scan, odometry_to_state, InputError,
 };

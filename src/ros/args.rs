@@ -15,7 +15,7 @@
 use std::path::PathBuf;
 
 use crate::excerpt::excerpt;
-use crate::param_overrides::ParamSource;
+use crate::parameters::overrides::ParamSource;
 
 /// The longest fully qualified topic or service name rcl accepts (rmw's
 /// `RMW_TOPIC_MAX_NAME_LENGTH`: 255 characters less 8 reserved for the DDS prefixes); rcl refuses
@@ -33,7 +33,7 @@ pub const MAX_NAMESPACE_LENGTH: usize = MAX_NAME_LENGTH - 2;
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct RosArgs {
     /// `--params-file FILE` and `-p [node:]name:=value`, in command-line order (the order rcl
-    /// merges them in, [`crate::param_overrides`]).
+    /// merges them in, [`crate::parameters::overrides`]).
     pub params: Vec<ParamSource>,
     /// `-r [node:]from:=to` rules, `__node` and `__ns` included, in order.
     pub remaps: Vec<RemapRule>,

@@ -11,8 +11,8 @@ use ros2_client::parameters::{NumericRange, ParameterDescriptor, ParameterType};
 use ros2_client::{NodeOptions, ParameterValue};
 use serde_norway::Value as Yaml;
 
-use crate::config::Parameters;
 use crate::excerpt::excerpt;
+use crate::parameters::Parameters;
 use crate::parameters::{find, Change, Kind, Parameter, Rule, Value};
 
 /// `options` with every parameter declared at its value in `parameters`, described from the
@@ -141,8 +141,8 @@ fn yaml(name: &str, value: &ParameterValue) -> Result<Yaml, SetError> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::config::{load_all, DEFAULT_NODE_NAME};
     use crate::parameters::PARAMETERS;
+    use crate::parameters::{load_all, DEFAULT_NODE_NAME};
 
     #[test]
     fn every_parameter_is_described_from_the_table() {

@@ -4,9 +4,9 @@
 #![allow(dead_code)]
 
 use cstep::arena::PAPER_WORLD;
-use cstep::config::Settings;
 use cstep::estimator::{Estimate, Estimator};
 use cstep::occupancy::Scan;
+use cstep::parameters::Settings;
 use cstep::scene::{Lidar, Scene};
 use cstep::state::RobotState;
 use nalgebra::{UnitQuaternion, Vector2, Vector3};

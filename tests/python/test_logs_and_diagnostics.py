@@ -197,7 +197,7 @@ def test_diagnostics_are_named_for_the_node_and_stamped_with_its_clock(
 def test_use_sim_time_set_while_running_switches_the_diagnostics_clock(
     ros_domain, ros_context, executor
 ):
-    """`use_sim_time` is live (src/parameters.rs): a set over the parameter services switches the
+    """`use_sim_time` is live (the parameter table): a set over the parameter services switches the
     diagnostics' stamps from the wall clock to the newest /clock and back, as rclcpp's time
     source does."""
     proc, log_path = start(ros_domain, tag="diag-live")

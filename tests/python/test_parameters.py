@@ -1,8 +1,8 @@
 """Every parameter of a live `cstep node` over the standard ROS 2 parameter services, as rclpy's
 own parameter client (what `ros2 param` uses) sees them over real DDS: listed, described from
-the one table in src/parameters.rs (via config/cstep.yaml, written from it), read back as
-configured, read-only ones refusing a set with a reason, and live `safety_coefficient` and
-`input_timeout` changes taking effect at the next scan."""
+the one table in crates/cstep-core/src/parameters/table.rs (via config/cstep.yaml, written from
+it), read back as configured, read-only ones refusing a set with a reason, and live
+`safety_coefficient` and `input_timeout` changes taking effect at the next scan."""
 
 import math
 import os

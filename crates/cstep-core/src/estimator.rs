@@ -6,7 +6,6 @@ use std::time::{Duration, Instant};
 
 use std::borrow::Cow;
 
-use crate::config::{ModelKind, RobotSource, Settings, BUILTIN_ROBOTS};
 use crate::model::diff_drive::DiffDrive;
 use crate::model::point_mass::PointMass;
 use crate::model::quadrotor::Quadrotor;
@@ -14,6 +13,7 @@ use crate::model::urdf::{RobotDescription, UrdfError};
 use crate::model::wheeled::WheeledDescription;
 use crate::model::{CommandAxes, Dynamics};
 use crate::occupancy::{Occupancy, OccupancyOptions, Scan};
+use crate::parameters::{ModelKind, RobotSource, Settings, BUILTIN_ROBOTS};
 use crate::rollout::{roll_out, Rollout};
 use crate::sampling::{sample, Controls, SamplerKind};
 use crate::state::RobotState;

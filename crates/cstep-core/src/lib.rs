@@ -24,23 +24,21 @@
 //! [`speed_limit`] maps a score to the speed limit Nav2 obeys (the node's optional output).
 //!
 //! [`parameters`] defines every parameter once (type, default, range, unit, description, live or
-//! read-only); [`config`] reads the node's `ros__parameters` YAML against it;
-//! [`input_file`] reads every file a user names, regular files of bounded size only, and
-//! [`yaml_input`] the YAML in them at a cost bounded by their size; [`suggest`]
+//! read-only) and reads the node's `ros__parameters` YAML and `-p` overrides against it into
+//! [`parameters::Settings`]; [`input_file`] reads every file a user names, regular files of
+//! bounded size only; [`suggest`]
 //! names the known name a misspelt one most likely meant; [`excerpt`] quotes a
 //! long value in an error by its start and length; [`arena`],
 //! [`scene`] and [`plot`] are the demo's simulated world and its plot.
 
 pub mod arena;
 pub mod cloud;
-pub mod config;
 pub mod estimator;
 pub mod excerpt;
 pub mod input;
 pub mod input_file;
 pub mod model;
 pub mod occupancy;
-pub mod param_overrides;
 pub mod parameters;
 pub mod plot;
 pub mod reward;
@@ -52,4 +50,3 @@ pub mod speed_limit;
 pub mod state;
 pub mod suggest;
 pub mod volume;
-pub mod yaml_input;

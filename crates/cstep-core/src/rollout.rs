@@ -330,7 +330,8 @@ mod tests {
     #[test]
     fn the_quadrotors_fused_rk4_matches_the_generic_one_bit_for_bit() {
         let description =
-            RobotDescription::from_str(crate::config::BUILTIN_URDF, "built-in cf2x.urdf").unwrap();
+            RobotDescription::from_str(crate::parameters::BUILTIN_URDF, "built-in cf2x.urdf")
+                .unwrap();
         let model = Quadrotor::new(&description, None);
         let start = RobotState::at_rest(Vector3::zeros())
             .with_velocity(Vector3::new(0.8, -1.5, 0.3))

@@ -72,8 +72,8 @@ pub fn unscorable(estimator: &Estimator, c: f64) -> Score {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::config::Settings;
     use crate::estimator::EMPOWERMENT_FLOOR;
+    use crate::parameters::Settings;
 
     #[test]
     fn unscorable_input_never_scores_better_than_a_known_collision() {

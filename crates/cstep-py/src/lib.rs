@@ -12,10 +12,10 @@
 
 use std::path::{Path, PathBuf};
 
-use cstep_core::config::{self, is_urdf_text, ParameterSet, DEFAULT_NODE_NAME};
 use cstep_core::estimator::Estimator;
 use cstep_core::input::{self, ScanGeometry};
 use cstep_core::model::urdf::RobotDescription;
+use cstep_core::parameters::{self, is_urdf_text, ParameterSet, DEFAULT_NODE_NAME};
 use cstep_core::scoring::{admit, score, unscorable, Score};
 use numpy::ndarray::{Dimension, Ix1, Ix2};
 use numpy::{Element, PyArray1, PyReadonlyArray, PyUntypedArray, PyUntypedArrayMethods};
@@ -71,7 +71,7 @@ impl Scorer {
             set.insert(&name, value, KEYWORDS_SOURCE, None);
         }
         let (settings, ..) =
-            config::validate(set).map_err(|e| PyValueError::new_err(e.to_string()))?;
+            parameters::validate(set).map_err(|e| PyValueError::new_err(e.to_string()))?;
         let estimator = Estimator::from_settings(&settings)
             .map_err(|e| PyValueError::new_err(format!("robot_description: {e}")))?;
         Ok(Self {

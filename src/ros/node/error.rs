@@ -1,10 +1,10 @@
 //! Why the node could not start, or stopped: one variant per failure, each printed exactly as
 //! the user has always read it.
 
-use crate::config::ConfigError;
 use crate::excerpt::excerpt;
 use crate::model::urdf::UrdfError;
-use crate::param_overrides::OverridesError;
+use crate::parameters::overrides::OverridesError;
+use crate::parameters::ConfigError;
 use crate::ros::args::NameError;
 use crate::ros::context::ContextError;
 use crate::ros::logging::LoggingError;

@@ -41,8 +41,8 @@ use super::context::context_from_env;
 use super::logging;
 use super::messages::{EmpoweredReward, Empowerment, Evaluate, EvaluateBatch};
 use super::rivals::Claims;
-use crate::config::DEFAULT_NODE_NAME;
 use crate::estimator::{robot_name, Estimator};
+use crate::parameters::DEFAULT_NODE_NAME;
 
 use clock::NodeClock;
 use diagnostics::StatusIdentity;

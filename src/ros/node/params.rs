@@ -10,18 +10,18 @@ use tracing::{debug, warn};
 
 use super::shared::Shared;
 use super::NodeError;
-use crate::config::{validate, NodeSettings, ParameterSet, Parameters};
-use crate::param_overrides::{ParamOverrides, ParamSource};
+use crate::parameters::overrides::{ParamOverrides, ParamSource};
 use crate::parameters::Value;
+use crate::parameters::{validate, NodeSettings, ParameterSet, Parameters};
 use crate::ros::args::RosArgs;
 
 /// The node's parameters: the built-in defaults, then the `--config` files and `--ros-args`
-/// overrides that apply to node `fqn` ([`crate::param_overrides`]), validated.
+/// overrides that apply to node `fqn` ([`crate::parameters::overrides`]), validated.
 pub(super) fn load_parameters(
     config: &[PathBuf],
     ros_args: &RosArgs,
     fqn: &str,
-) -> Result<(crate::config::Settings, NodeSettings, Parameters), NodeError> {
+) -> Result<(crate::parameters::Settings, NodeSettings, Parameters), NodeError> {
     let sources: Vec<ParamSource> = config
         .iter()
         .cloned()

@@ -9,7 +9,7 @@ use ros2_client::qos::{Durability, History, WhenFull};
 use ros2_client::{Name, Node, Publisher, QosProfile, Server, ServiceMapping, ServiceTypeName};
 
 use super::NodeError;
-use crate::config::NodeSettings;
+use crate::parameters::NodeSettings;
 use crate::ros::args::{NameKind, RosArgs};
 use crate::ros::messages::{
     Clock, DiagnosticArray, EmpoweredReward, Empowerment, Evaluate, EvaluateBatch,

@@ -173,8 +173,8 @@ mod tests {
     use std::time::Duration;
 
     use super::*;
-    use crate::config::Settings;
     use crate::estimator::{Estimator, EMPOWERMENT_FLOOR};
+    use crate::parameters::Settings;
     use crate::ros::convert::scan_to_laser_scan;
     use crate::ros::messages::{LaserScan, Odometry, Point, Time};
     use crate::scene::{Lidar, Scene};

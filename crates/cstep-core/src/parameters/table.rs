@@ -2,13 +2,14 @@
 //! description, and whether it may change while the node runs.
 //!
 //! [`PARAMETERS`] drives the validation of parameter files and `-p` overrides
-//! ([`crate::config`]), the node's parameter declarations and their ROS 2 descriptors
+//! ([`super::config`]), the node's parameter declarations and their ROS 2 descriptors
 //! (`ros::parameters`), and the table of `docs/parameters.md` and `config/cstep.yaml`, which
 //! `tests/parameter_docs.rs` writes from it (`CSTEP_WRITE_DOCS=1`) and otherwise checks, so none
 //! of them can drift from the table.
 
 use serde_norway::Value as Yaml;
 
+use super::robot::BUILTIN_URDF_PATH;
 use crate::excerpt::excerpt;
 
 /// A parameter value, typed as ROS 2 types parameters.
@@ -144,9 +145,6 @@ pub struct Parameter {
     /// Whether it may change while the node runs.
     pub change: Change,
 }
-
-/// The marker path `robot_description` takes for the compiled-in Crazyflie 2.x URDF.
-pub const BUILTIN_URDF_PATH: &str = "builtin:cf2x.urdf";
 
 /// Largest accepted trajectory count: beyond it an evaluation takes seconds.
 const MAX_TRAJECTORIES: i64 = 100_000;

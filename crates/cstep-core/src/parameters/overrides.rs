@@ -21,9 +21,9 @@ use std::path::{Path, PathBuf};
 
 use serde_norway::{Mapping, Value};
 
-use crate::config::flatten;
+use super::table::show;
+use super::yaml::{self, YamlError};
 use crate::excerpt::excerpt;
-use crate::yaml_input::{self, YamlError};
 
 /// Where parameter overrides come from, in command-line order.
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -85,7 +85,7 @@ pub enum OverridesError {
         /// What is wrong with it.
         problem: FileError,
     },
-    /// A `-p name:=value` value is not YAML, or more than [`yaml_input`] reads.
+    /// A `-p name:=value` value is not YAML, or more than [`yaml`] reads.
     #[error("command line: cannot read the value of '{}': {reason}", excerpt(.name))]
     BadValue {
         /// The parameter.
@@ -98,7 +98,7 @@ pub enum OverridesError {
 /// What is wrong with a parameters file's layout.
 #[derive(Debug, thiserror::Error)]
 pub enum FileError {
-    /// The text is not YAML, or more than [`yaml_input`] reads.
+    /// The text is not YAML, or more than [`yaml`] reads.
     #[error("{0}")]
     NotYaml(YamlError),
     /// The document is not a mapping.
@@ -132,7 +132,7 @@ impl ParamOverrides {
                 ParamSource::File(path) => table.read_file(path)?,
                 ParamSource::Assignment { node, name, value } => {
                     let parsed =
-                        yaml_input::from_str(value).map_err(|reason| OverridesError::BadValue {
+                        yaml::from_str(value).map_err(|reason| OverridesError::BadValue {
                             name: name.clone(),
                             reason,
                         })?;
@@ -173,7 +173,7 @@ impl ParamOverrides {
     /// Adds a parameters file's sections (`path` names it and gives relative paths their base);
     /// returns their keys.
     fn add_file(&mut self, text: &str, path: &Path) -> Result<Vec<String>, FileError> {
-        let document = yaml_input::from_str(text).map_err(FileError::NotYaml)?;
+        let document = yaml::from_str(text).map_err(FileError::NotYaml)?;
         let mut keys = Vec::new();
         match document {
             Value::Null => {} // an empty file, as rcl accepts it
@@ -309,6 +309,25 @@ fn matches_tokens(pattern: &[&str], name: &[&str]) -> bool {
         }
     }
     matched[name.len()]
+}
+
+/// Nested parameter maps as dotted names (`limits: {speed: 2}` is `limits.speed`), as in ROS 2.
+fn flatten(prefix: &str, mapping: &serde_norway::Mapping, out: &mut Vec<(String, Value)>) {
+    for (key, value) in mapping {
+        let key = match key {
+            Value::String(s) => s.clone(),
+            other => show(other),
+        };
+        let name = if prefix.is_empty() {
+            key
+        } else {
+            format!("{prefix}.{key}")
+        };
+        match value {
+            Value::Mapping(inner) => flatten(&name, inner, out),
+            other => out.push((name, other.clone())),
+        }
+    }
 }
 
 #[cfg(test)]

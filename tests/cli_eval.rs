@@ -396,7 +396,7 @@ fn endless_special_and_oversized_input_files_are_refused_naming_them() {
     let large = dir.join("large.json");
     std::fs::File::create(&large)
         .unwrap()
-        .set_len(cstep::input_file::MAX_INPUT_FILE_BYTES + 1)
+        .set_len(cstep::input::file::MAX_INPUT_FILE_BYTES + 1)
         .unwrap();
     assert_clear_error(
         &eval(&large, &scan, &[]),

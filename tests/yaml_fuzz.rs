@@ -20,7 +20,7 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
-use cstep::input_file::MAX_INPUT_FILE_BYTES;
+use cstep::input::file::MAX_INPUT_FILE_BYTES;
 use cstep::parameters::{load_all, DEFAULT_NODE_NAME};
 use proptest::prelude::*;
 use proptest::strategy::ValueTree;

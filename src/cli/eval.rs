@@ -168,10 +168,11 @@ pub fn run(args: EvalArgs) -> Result<(), CliError> {
 /// but an object (serde would read an array as the message's fields in order, and `[]` as the
 /// default message, a robot at rest at the origin) is refused.
 fn read_json<T: DeserializeOwned>(path: &Path) -> Result<T, EvalError> {
-    let text = cstep::input_file::read_to_string(path).map_err(|source| EvalError::Unreadable {
-        path: path.to_owned(),
-        source,
-    })?;
+    let text =
+        cstep::input::file::read_to_string(path).map_err(|source| EvalError::Unreadable {
+            path: path.to_owned(),
+            source,
+        })?;
     from_json(&text).map_err(|source| EvalError::NotMessage {
         path: path.to_owned(),
         source,

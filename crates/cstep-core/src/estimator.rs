@@ -145,7 +145,7 @@ fn urdf_text(settings: &Settings) -> Result<(Cow<'_, str>, String), UrdfError> {
         }
         RobotSource::File(path) => {
             let file = path.display().to_string();
-            crate::input_file::read_to_string(path)
+            crate::input::file::read_to_string(path)
                 .map(|text| (Cow::Owned(text), file.clone()))
                 .map_err(|error| UrdfError::Io { file, error })
         }

@@ -25,7 +25,7 @@
 //!
 //! [`parameters`] defines every parameter once (type, default, range, unit, description, live or
 //! read-only) and reads the node's `ros__parameters` YAML and `-p` overrides against it into
-//! [`parameters::Settings`]; [`input_file`] reads every file a user names, regular files of
+//! [`parameters::Settings`]; [`input::file`] reads every file a user names, regular files of
 //! bounded size only; [`suggest`]
 //! names the known name a misspelt one most likely meant; [`excerpt`] quotes a
 //! long value in an error by its start and length; [`arena`],
@@ -36,7 +36,6 @@ pub mod cloud;
 pub mod estimator;
 pub mod excerpt;
 pub mod input;
-pub mod input_file;
 pub mod model;
 pub mod occupancy;
 pub mod parameters;

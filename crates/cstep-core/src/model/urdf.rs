@@ -25,7 +25,7 @@ pub const RPM_TO_RAD_PER_S: f64 = 2.0 * std::f64::consts::PI / 60.0;
 #[derive(Debug, thiserror::Error)]
 pub enum UrdfError {
     /// The file could not be read, or is not a regular file of at most
-    /// [`crate::input_file::MAX_INPUT_FILE_BYTES`].
+    /// [`crate::input::file::MAX_INPUT_FILE_BYTES`].
     #[error("{file}: cannot read the file: {error}")]
     Io {
         /// The file that was asked for.
@@ -141,7 +141,7 @@ pub struct RobotDescription {
 /// The text of the URDF at `path` and the path as error messages name it.
 pub(crate) fn read_urdf(path: &Path) -> Result<(String, String), UrdfError> {
     let file = path.display().to_string();
-    let xml = crate::input_file::read_to_string(path).map_err(|error| UrdfError::Io {
+    let xml = crate::input::file::read_to_string(path).map_err(|error| UrdfError::Io {
         file: file.clone(),
         error,
     })?;

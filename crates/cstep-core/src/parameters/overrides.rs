@@ -154,7 +154,7 @@ impl ParamOverrides {
     /// Adds the sections of the parameters file at `path`; an unreadable or malformed file is
     /// an error naming it.
     pub fn read_file(&mut self, path: &Path) -> Result<(), OverridesError> {
-        let text = crate::input_file::read_to_string(path).map_err(|source| {
+        let text = crate::input::file::read_to_string(path).map_err(|source| {
             OverridesError::Unreadable {
                 path: path.to_path_buf(),
                 source,

@@ -34,7 +34,7 @@ pub const MAX_VALUES: u64 = 100_000;
 
 /// The most bytes of scalar text a document may expand to (aliases counted as the text they
 /// stand for): a text without aliases never holds more than the input file cap.
-pub const MAX_EXPANDED_BYTES: u64 = crate::input_file::MAX_INPUT_FILE_BYTES;
+pub const MAX_EXPANDED_BYTES: u64 = crate::input::file::MAX_INPUT_FILE_BYTES;
 
 /// The most bytes the keys leading to a value may have together, plus one per key (a
 /// parameter's dotted name and the node section it is in; a ROS node's name is at most 255

@@ -13,6 +13,11 @@
 //! nothing useful (an empty scan) passes, and the estimator answers it with `valid = false`.
 //! Individual `ranges` values are never malformed: REP 117 gives every `f32` a meaning (a hit,
 //! no return, or invalid), and the occupancy reads them so.
+//!
+//! [`file`](mod@file) reads the files a user names (parameters, URDF, messages): regular files
+//! of bounded size only.
+
+pub mod file;
 
 use std::f32::consts::TAU;
 

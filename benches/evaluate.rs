@@ -2,9 +2,9 @@
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion};
 
+use cstep::demo::scene::benchmark_case;
 use cstep::estimator::Estimator;
 use cstep::parameters::{Settings, BUILTIN_HUSKY_PATH};
-use cstep::scene::benchmark_case;
 
 fn evaluate(c: &mut Criterion) {
     let pool = rayon::ThreadPoolBuilder::new()

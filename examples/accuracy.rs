@@ -9,7 +9,7 @@
 mod common;
 
 use common::{at, estimator, scan_of};
-use cstep::scene::Scene;
+use cstep::demo::scene::Scene;
 use nalgebra::Vector2;
 
 fn main() {

@@ -4,10 +4,10 @@
 //! callgrind as it is).
 use std::time::Instant;
 
+use cstep::demo::scene::benchmark_case;
 use cstep::estimator::Estimator;
 use cstep::occupancy::Occupancy;
 use cstep::parameters::Settings;
-use cstep::scene::benchmark_case;
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();

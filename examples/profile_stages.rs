@@ -2,10 +2,10 @@
 //! stages of one evaluation on the benchmark scene (run under callgrind for a per-function view).
 use std::time::Instant;
 
+use cstep::demo::scene::benchmark_case;
 use cstep::estimator::Estimator;
 use cstep::occupancy::Occupancy;
 use cstep::parameters::Settings;
-use cstep::scene::benchmark_case;
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();

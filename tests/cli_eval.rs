@@ -6,9 +6,9 @@ mod common;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
-use cstep::arena::PAPER_WORLD;
+use cstep::demo::arena::PAPER_WORLD;
+use cstep::demo::scene::Scene;
 use cstep::ros::messages::{LaserScan, Odometry};
-use cstep::scene::Scene;
 use nalgebra::{UnitQuaternion, Vector2};
 use serde_json::Value;
 

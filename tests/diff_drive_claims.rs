@@ -6,8 +6,8 @@
 mod common;
 
 use common::estimator;
+use cstep::demo::scene::{Lidar, Scene};
 use cstep::estimator::{Estimate, Estimator};
-use cstep::scene::{Lidar, Scene};
 use cstep::state::RobotState;
 use nalgebra::{UnitQuaternion, Vector2, Vector3};
 

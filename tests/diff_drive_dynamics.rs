@@ -286,9 +286,9 @@ fn the_reachable_area_in_open_space_matches_a_dense_reference() {
 fn the_footprint_turns_with_the_heading() {
     // A wall across x = 0.6: facing it, the Husky's front disk (reaching 0.68 m) already
     // overlaps it; turned along it, the disks reach 0.43 m sideways and it may drive away.
-    let scene = cstep::scene::Scene::open().wall(0.6, -20.0, 0.6, 20.0);
+    let scene = cstep::demo::scene::Scene::open().wall(0.6, -20.0, 0.6, 20.0);
     let e = estimator(&["model:=diff_drive", "robot_description:=builtin:husky.urdf"]);
-    let lidar = cstep::scene::Lidar {
+    let lidar = cstep::demo::scene::Lidar {
         beams: 360,
         range_min: 0.02,
         range_max: 10.0,

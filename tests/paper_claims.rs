@@ -4,7 +4,7 @@
 mod common;
 
 use common::{at, estimator, score};
-use cstep::scene::Scene;
+use cstep::demo::scene::Scene;
 use nalgebra::{UnitQuaternion, Vector3};
 
 const MODELS: [&str; 2] = ["model:=quadrotor", "model:=point_mass"];

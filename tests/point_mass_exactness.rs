@@ -6,7 +6,7 @@
 mod common;
 
 use common::{at, estimator, scan_of};
-use cstep::scene::Scene;
+use cstep::demo::scene::Scene;
 use nalgebra::{Vector2, Vector3};
 
 const A: f64 = 2.0;

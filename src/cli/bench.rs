@@ -1,6 +1,6 @@
 //! `cstep bench`: evaluation speed on a fixed scene, as medians over repeated runs.
 //!
-//! The scene is [`cstep::scene::benchmark_case`]; by default one core, as the targets in
+//! The scene is [`cstep::demo::scene::benchmark_case`]; by default one core, as the targets in
 //! docs/measurements.md are stated.
 
 use std::time::{Duration, Instant};
@@ -126,7 +126,7 @@ pub fn run(args: BenchArgs) -> Result<(), CliError> {
 }
 
 fn measure(estimator: &Estimator, model: &str, args: &BenchArgs) -> Row {
-    let (state, scan) = cstep::scene::benchmark_case();
+    let (state, scan) = cstep::demo::scene::benchmark_case();
     let budget = Duration::from_secs_f64(args.seconds.max(0.1));
     let mut seed = estimator.settings().seed;
     let mut evaluate = || {

@@ -3,11 +3,11 @@
 //! included by the tests that need it: the examples share this module and have no binary.)
 #![allow(dead_code)]
 
-use cstep::arena::PAPER_WORLD;
+use cstep::demo::arena::PAPER_WORLD;
+use cstep::demo::scene::{Lidar, Scene};
 use cstep::estimator::{Estimate, Estimator};
 use cstep::occupancy::Scan;
 use cstep::parameters::Settings;
-use cstep::scene::{Lidar, Scene};
 use cstep::state::RobotState;
 use nalgebra::{UnitQuaternion, Vector2, Vector3};
 

@@ -26,24 +26,21 @@
 //! [`parameters`] defines every parameter once (type, default, range, unit, description, live or
 //! read-only) and reads the node's `ros__parameters` YAML and `-p` overrides against it into
 //! [`parameters::Settings`]; [`input::file`] reads every file a user names, regular files of
-//! bounded size only; [`suggest`]
-//! names the known name a misspelt one most likely meant; [`excerpt`] quotes a
-//! long value in an error by its start and length; [`arena`],
-//! [`scene`] and [`plot`] are the demo's simulated world and its plot.
+//! bounded size only; [`suggest`] names the known name a misspelt one most likely meant;
+//! [`excerpt`] quotes a long value in an error by its start and length. [`demo`] is the demo's
+//! simulated world (walls, a LiDAR, the paper's arena), which benchmarks and tests score too.
 
-pub mod arena;
 pub mod cloud;
+pub mod demo;
 pub mod estimator;
 pub mod excerpt;
 pub mod input;
 pub mod model;
 pub mod occupancy;
 pub mod parameters;
-pub mod plot;
 pub mod reward;
 pub mod rollout;
 pub mod sampling;
-pub mod scene;
 pub mod scoring;
 pub mod speed_limit;
 pub mod state;

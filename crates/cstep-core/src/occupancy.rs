@@ -926,8 +926,8 @@ mod tests {
     #[test]
     fn an_oblique_wall_keeps_the_disk_a_radius_away_even_between_sparse_beams() {
         // Wall x = 1 seen by 90 beams (4° apart): returns up to 30 cm apart along the wall.
-        let scene = crate::scene::Scene::open().wall(1.0, -50.0, 1.0, 50.0);
-        let lidar = crate::scene::Lidar {
+        let scene = crate::demo::scene::Scene::open().wall(1.0, -50.0, 1.0, 50.0);
+        let lidar = crate::demo::scene::Lidar {
             beams: 90,
             range_min: 0.02,
             range_max: 10.0,
@@ -966,11 +966,11 @@ mod tests {
     fn no_disk_centre_comes_within_a_radius_of_a_pillar_or_a_corner() {
         let radius = 0.1;
         let scenes = [
-            crate::scene::Scene::open().boxed(0.8, -0.3, 1.2, 0.1),
-            crate::scene::Scene::open().boxed(-1.0, -1.5, 1.5, 1.0),
+            crate::demo::scene::Scene::open().boxed(0.8, -0.3, 1.2, 0.1),
+            crate::demo::scene::Scene::open().boxed(-1.0, -1.5, 1.5, 1.0),
         ];
         for scene in scenes {
-            let lidar = crate::scene::Lidar {
+            let lidar = crate::demo::scene::Lidar {
                 beams: 180,
                 range_min: 0.02,
                 range_max: 10.0,
@@ -995,8 +995,8 @@ mod tests {
     fn corridor_walls_keep_the_disk_a_radius_away_at_any_heading() {
         // The benchmark's corridor and end wall, at headings that put the bins at different
         // offsets from the beams, for a small robot and a large one (long walks).
-        let scene = crate::scene::Scene::corridor(2.5, 20.0).wall(2.5, -1.25, 2.5, 1.25);
-        let lidar = crate::scene::Lidar {
+        let scene = crate::demo::scene::Scene::corridor(2.5, 20.0).wall(2.5, -1.25, 2.5, 1.25);
+        let lidar = crate::demo::scene::Lidar {
             beams: 360,
             range_min: 0.02,
             range_max: 3.0,

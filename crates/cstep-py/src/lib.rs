@@ -373,7 +373,10 @@ fn robot_description<'py>(py: Python<'py>, urdf: &str) -> PyResult<Bound<'py, Py
 /// check its own copy against.
 #[pymodule]
 fn cstep_scoring(module: &Bound<'_, PyModule>) -> PyResult<()> {
-    module.add("PAPER_WORLD_JSON", cstep_core::arena::PAPER_WORLD_JSON)?;
+    module.add(
+        "PAPER_WORLD_JSON",
+        cstep_core::demo::arena::PAPER_WORLD_JSON,
+    )?;
     module.add_function(wrap_pyfunction!(robot_description, module)?)?;
     module.add_class::<Scorer>()
 }

@@ -173,11 +173,11 @@ mod tests {
     use std::time::Duration;
 
     use super::*;
+    use crate::demo::scene::{Lidar, Scene};
     use crate::estimator::{Estimator, EMPOWERMENT_FLOOR};
     use crate::parameters::Settings;
     use crate::ros::convert::scan_to_laser_scan;
     use crate::ros::messages::{LaserScan, Odometry, Point, Time};
-    use crate::scene::{Lidar, Scene};
     use nalgebra::{UnitQuaternion, Vector2};
 
     fn shared(c: f64) -> Shared {

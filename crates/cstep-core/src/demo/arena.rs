@@ -10,10 +10,10 @@ use std::sync::LazyLock;
 use nalgebra::{Vector2, Vector3};
 use serde::Deserialize;
 
-use crate::scene::{Lidar, Scene};
+use crate::demo::scene::{Lidar, Scene};
 
 /// `config/paper_world.json`, as compiled in.
-pub const PAPER_WORLD_JSON: &str = include_str!("../../../config/paper_world.json");
+pub const PAPER_WORLD_JSON: &str = include_str!("../../../../config/paper_world.json");
 
 /// The paper's world as `config/paper_world.json` states it.
 #[derive(Debug, Clone, Deserialize)]

@@ -10,8 +10,7 @@ use nalgebra::UnitQuaternion;
 use ros2_client::qos::{Durability, History, WhenFull};
 use ros2_client::{MessageTypeName, Name, NodeName, NodeOptions, QosProfile};
 
-use cstep::arena::{Arena, Flight, PAPER_WORLD};
-use cstep::plot::{flight_svg, FlightSample};
+use cstep::demo::arena::{Arena, Flight, PAPER_WORLD};
 use cstep::ros::args::RosArgs;
 use cstep::ros::context::{context_from_env, ContextError};
 use cstep::ros::convert::scan_to_laser_scan;
@@ -21,6 +20,9 @@ use cstep::ros::messages::{
 
 use super::node::stop_on_ctrl_c;
 use super::CliError;
+use plot::{flight_svg, FlightSample};
+
+mod plot;
 
 /// Arguments of `cstep demo`.
 #[derive(Debug, clap::Args)]

@@ -6,7 +6,7 @@
 
 use std::fmt::Write;
 
-use crate::arena::Arena;
+use cstep::demo::arena::Arena;
 
 /// One scored moment of a flight.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -4,9 +4,9 @@
 
 use cstep::model::urdf::UrdfError;
 use cstep::parameters::ConfigError;
-use cstep::ros::args::ArgsError;
 use cstep::ros::echo::EchoError;
 use cstep::ros::node::NodeError;
+use cstep::ros::rcl::args::ArgsError;
 
 use super::demo::DemoError;
 use super::eval::EvalError;

@@ -12,7 +12,7 @@ use cstep::parameters::{Settings, DEFAULT_NODE_NAME};
 use cstep::ros::convert::{
     empowerment_message, goal_position, laser_scan_to_scan, odometry_to_state, InputError,
 };
-use cstep::ros::json::{from_json, JsonError};
+use cstep::ros::messages::json::{from_json, JsonError};
 use cstep::ros::messages::{Empowerment, Header, LaserScan, Odometry, Point};
 use cstep::scoring::{score, Score};
 

@@ -4,7 +4,7 @@ use std::path::PathBuf;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 
-use cstep::ros::args::RosArgs;
+use cstep::ros::rcl::args::RosArgs;
 
 use super::CliError;
 

@@ -4,8 +4,8 @@
 //! The message type comes from `--type`, else from the topic's name for cstep's own outputs,
 //! else from the publishers discovery finds on the topic. Only types cstep mirrors can be
 //! decoded ([`EchoType`]); anything else is a one-line error naming the type and the ones
-//! cstep knows. The DDS context is the node's ([`super::context`]): same `ROS_DOMAIN_ID`, same
-//! localhost-only discovery.
+//! cstep knows. The DDS context is the node's ([`super::rcl::context`]): same `ROS_DOMAIN_ID`,
+//! same localhost-only discovery.
 
 use std::io::Write;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -20,12 +20,12 @@ use ros2_client::QosProfile;
 use ros2_client::{Context, Message, MessageTypeName, Name, Node, NodeName, NodeOptions};
 use serde::Serialize;
 
-use super::context::{context_from_env, resolve, ContextError};
+use super::messages::yaml::{self, to_yaml};
 use super::messages::{
     ros_type_of_dds, DiagnosticArray, EmpoweredReward, Empowerment, LaserScan, MarkerArray,
     Odometry, PoseStamped, RosMessage,
 };
-use super::yaml::{self, to_yaml};
+use super::rcl::context::{context_from_env, resolve, ContextError};
 use crate::excerpt::excerpt;
 
 /// How long to look for a publisher when neither `--type` nor the topic's name tells the type

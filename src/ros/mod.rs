@@ -1,21 +1,19 @@
-//! Everything that knows about ROS: message mirrors and their conversion to the core's types.
+//! Everything that knows about ROS. The core (`cstep_core`, re-exported at the crate root) sees
+//! only a [`crate::state::RobotState`] and an [`crate::occupancy::Scan`]; this module speaks ROS
+//! around it:
 //!
-//! The core ([`crate::estimator`] and below) sees only [`crate::state::RobotState`] and
-//! [`crate::occupancy::Scan`]; this module reads `nav_msgs/Odometry` and
-//! `sensor_msgs/LaserScan` (as JSON for `cstep eval`, strictly: [`json`]; as CDR on the wire
-//! for the node),
-//! validates them, and writes `cstep_msgs` results.
+//! - [`messages`] — serde mirrors of the messages cstep reads and writes (CDR on the wire), read
+//!   strictly from JSON ([`messages::json`], `cstep eval`) and printed as YAML
+//!   ([`messages::yaml`], `cstep echo`);
+//! - [`convert`] — messages to the core's inputs, and its results to `cstep_msgs` messages;
+//! - [`node`] — the node: its topics and services, scoring, diagnostics, markers, the speed
+//!   limit and the watch for rival nodes;
+//! - [`echo`] — `cstep echo`: one topic's messages printed as they arrive;
+//! - [`rcl`] — what rcl gives every node and ros2-client does not: `--ros-args`, the DDS context
+//!   from the environment, logging and parameter descriptors.
 
-pub mod args;
-pub mod context;
 pub mod convert;
 pub mod echo;
-pub mod json;
-pub mod logging;
-pub mod markers;
 pub mod messages;
 pub mod node;
-pub mod parameters;
-pub mod rivals;
-pub mod stamps;
-pub mod yaml;
+pub mod rcl;

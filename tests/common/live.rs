@@ -4,8 +4,8 @@
 use std::process::{Child, Command, Stdio};
 use std::time::Duration;
 
-use cstep::ros::context::context_from_env;
 use cstep::ros::messages::LaserScan;
+use cstep::ros::rcl::context::context_from_env;
 use ros2_client::qos::{History, WhenFull};
 use ros2_client::{Node, NodeName, NodeOptions, QosProfile};
 

@@ -16,7 +16,7 @@ from std_msgs.msg import Header
 
 MSG_DIR = REPO / "msg"
 
-# The contract: field names, types and order (src/ros/messages.rs mirrors them in this order).
+# The contract: field names, types and order (src/ros/messages/mod.rs mirrors them in this order).
 EMPOWERMENT_FIELDS = [
     ("header", "std_msgs/Header"),
     ("empowerment", "double"),

@@ -9,7 +9,7 @@ from visualization_msgs.msg import Marker, MarkerArray
 
 # The robot of node_rig.odometry(): at (0, 0, 1) in "odom".
 ROBOT = (0.0, 0.0, 1.0)
-# The node's colours (src/ros/markers.rs): green = free, red = terminal (collided).
+# The node's colours (src/ros/node/markers.rs): green = free, red = terminal (collided).
 FREE = (0.1, 0.8, 0.1, 1.0)
 TERMINAL = (0.9, 0.1, 0.1, 1.0)
 

@@ -20,7 +20,7 @@ from diagnostic_msgs.msg import DiagnosticStatus
 from node_rig import CONFIG, corridor_scan, cstep_binary, odometry
 from rclpy.node import Node
 
-# src/ros/rivals.rs STARTUP_WINDOW: a node this long past its start is the incumbent (it warns
+# src/ros/node/rivals.rs STARTUP_WINDOW: a node this long past its start is the incumbent (it warns
 # about a newcomer instead of refusing), plus a margin.
 PAST_STARTUP_WINDOW_S = 12.0
 

@@ -11,12 +11,12 @@ use ros2_client::qos::{Durability, History, WhenFull};
 use ros2_client::{MessageTypeName, Name, NodeName, NodeOptions, QosProfile};
 
 use cstep::demo::arena::{Arena, Flight, PAPER_WORLD};
-use cstep::ros::args::RosArgs;
-use cstep::ros::context::{context_from_env, ContextError};
 use cstep::ros::convert::scan_to_laser_scan;
 use cstep::ros::messages::{
     EmpoweredReward, Empowerment, Header, LaserScan, Odometry, PoseStamped, RosMessage, Time,
 };
+use cstep::ros::rcl::args::RosArgs;
+use cstep::ros::rcl::context::{context_from_env, ContextError};
 
 use super::node::stop_on_ctrl_c;
 use super::CliError;

@@ -5,9 +5,9 @@ use crate::excerpt::excerpt;
 use crate::model::urdf::UrdfError;
 use crate::parameters::overrides::OverridesError;
 use crate::parameters::ConfigError;
-use crate::ros::args::NameError;
-use crate::ros::context::ContextError;
-use crate::ros::logging::LoggingError;
+use crate::ros::rcl::args::NameError;
+use crate::ros::rcl::context::ContextError;
+use crate::ros::rcl::logging::LoggingError;
 
 /// Why [`super::run`] failed.
 #[derive(Debug, thiserror::Error)]
@@ -98,7 +98,7 @@ pub enum NodeError {
     /// The scoring thread panicked.
     #[error("the scoring thread failed")]
     ScoringThread,
-    /// Another node answers under this node's names ([`crate::ros::rivals`]).
+    /// Another node answers under this node's names (found by the node's watch for rivals).
     #[error("{0}")]
     Rival(String),
 }

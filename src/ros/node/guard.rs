@@ -5,10 +5,10 @@ use std::time::Instant;
 use ros2_client::dds::rustdds::discovery::DiscoveredWriterData;
 use ros2_client::dds::rustdds::{RTPSEntity, GUID};
 
-use crate::ros::rivals::{self, Claims, Endpoint, Participant, Verdict};
+use super::rivals::{self, Claims, Endpoint, Participant, Verdict};
 
 /// Watches DDS discovery for another participant answering under this node's names
-/// ([`crate::ros::rivals`]).
+/// ([`rivals`]).
 pub(super) struct Guard {
     pub(super) claims: Claims,
     pub(super) participant: ros2_client::dds::rustdds::DomainParticipant,

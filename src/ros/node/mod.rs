@@ -11,7 +11,7 @@
 //! Scans are scored only while someone subscribes to the scores (`/cstep/empowerment` or
 //! `/cstep/reward`), as lazy ROS publishers do: a simulation that takes its rewards from the
 //! service and publishes `/scan` for observers would otherwise pay for every evaluation twice.
-//! Likewise `/cstep/markers` (the sampled endpoints and their hull, [`super::markers`]) is built
+//! Likewise `/cstep/markers` (the sampled endpoints and their hull, `markers.rs`) is built
 //! and published with a score only while a subscriber is matched. Both are decided per scan, as
 //! it arrives, from the matches the DDS side has recorded.
 
@@ -19,13 +19,16 @@ mod clock;
 mod diagnostics;
 mod error;
 mod guard;
-mod params;
+mod markers;
+mod parameters;
 mod ports;
 mod queue;
+mod rivals;
 mod scoring;
 mod service;
 mod shared;
 mod speed_limit;
+mod stamps;
 mod tasks;
 
 use std::path::PathBuf;
@@ -36,11 +39,10 @@ use std::time::{Duration, Instant};
 use ros2_client::NodeName;
 use tracing::{info, warn};
 
-use super::args::RosArgs;
-use super::context::context_from_env;
-use super::logging;
 use super::messages::{EmpoweredReward, Empowerment, Evaluate, EvaluateBatch};
-use super::rivals::Claims;
+use super::rcl::args::RosArgs;
+use super::rcl::context::context_from_env;
+use super::rcl::logging;
 use crate::estimator::{robot_name, Estimator};
 use crate::parameters::DEFAULT_NODE_NAME;
 
@@ -48,16 +50,17 @@ use clock::NodeClock;
 use diagnostics::StatusIdentity;
 pub use error::NodeError;
 use guard::Guard;
-use params::{load_parameters, parameter_options};
+use parameters::{load_parameters, parameter_options};
 use ports::{Names, Ports};
+use rivals::Claims;
 use scoring::{score_scans, Outputs};
 use shared::Shared;
 use tasks::serve;
 
 /// Runs the node until `stop` is set: loads the parameters files and `--ros-args`, joins the
 /// DDS domain `ROS_DOMAIN_ID` as far as `ROS_AUTOMATIC_DISCOVERY_RANGE` reaches
-/// ([`super::context`]), and serves. An error if another node already answers under its names
-/// on that domain ([`super::rivals`]): the node then stops within its first seconds.
+/// ([`super::rcl::context`]), and serves. An error if another node already answers under its
+/// names on that domain (`rivals.rs`): the node then stops within its first seconds.
 pub fn run(config: &[PathBuf], ros_args: &RosArgs, stop: Arc<AtomicBool>) -> Result<(), NodeError> {
     let node_name = ros_args.node_name(DEFAULT_NODE_NAME);
     let namespace = ros_args.namespace(&node_name);

@@ -10,12 +10,12 @@ use ros2_client::{Name, Node, Publisher, QosProfile, Server, ServiceMapping, Ser
 
 use super::NodeError;
 use crate::parameters::NodeSettings;
-use crate::ros::args::{NameKind, RosArgs};
 use crate::ros::messages::{
     Clock, DiagnosticArray, EmpoweredReward, Empowerment, Evaluate, EvaluateBatch,
     EvaluateBatchRequest, EvaluateBatchResponse, EvaluateRequest, EvaluateResponse, LaserScan,
     MarkerArray, Odometry, PoseStamped, RosMessage, RosService, SpeedLimit,
 };
+use crate::ros::rcl::args::{NameKind, RosArgs};
 use crate::speed_limit::SpeedLimitOutput;
 
 use super::speed_limit::SpeedLimiter;

@@ -8,17 +8,17 @@ use std::time::Duration;
 use ros2_client::Publisher;
 use tracing::debug;
 
+use super::markers::rollout_markers;
 use super::shared::{PostedScan, Shared};
 use super::speed_limit::SpeedLimiter;
+use super::stamps::Order;
 use crate::ros::convert::{
     empowerment_message, goal_position, laser_scan_to_scan, odometry_to_state, reward_message,
 };
-use crate::ros::markers::rollout_markers;
 use crate::ros::messages::{
     EmpoweredReward, Empowerment, EvaluateBatchRequest, Header, LaserScan, MarkerArray, Odometry,
     Point,
 };
-use crate::ros::stamps::Order;
 use crate::scoring::{admit, score, Score};
 
 /// What the scoring thread publishes to.

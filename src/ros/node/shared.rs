@@ -7,9 +7,9 @@ use std::time::{Duration, Instant};
 
 use super::queue::{Limits, SharedQueue};
 use super::service::Job;
+use super::stamps::{Order, StampOrder};
 use crate::estimator::Estimator;
 use crate::ros::messages::{LaserScan, Odometry, Point, Time};
-use crate::ros::stamps::{Order, StampOrder};
 
 /// What the DDS side and the scoring thread share.
 pub(super) struct Shared {

@@ -14,10 +14,10 @@ use super::clock::NodeClock;
 use super::diagnostics::StatusIdentity;
 use super::guard::Guard;
 use super::ports::Ports;
+use super::rivals::{self, Verdict};
 use super::service::{Job, Reply};
 use super::shared::{PostedScan, Shared};
 use crate::ros::convert::goal_position;
-use crate::ros::rivals::{self, Verdict};
 
 /// How long an answer waits for its client's response reader to be matched before it is
 /// written anyway (see [`send_replies`]). Discovery takes 1-4 s on a loaded machine.

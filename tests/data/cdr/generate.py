@@ -8,7 +8,7 @@ whatever the buffer held before and differ from run to run; CDR gives them no me
 readers skip them. ``zero_padding`` finds them by walking the message's layout from rclpy's own
 type introspection (``SLOT_TYPES``) and checks the walk ends exactly at the end of the bytes.
 
-``tests/cdr_roundtrip.rs`` decodes each file with the Rust mirrors in ``src/ros/messages.rs``,
+``tests/cdr_roundtrip.rs`` decodes each file with the Rust mirrors in ``src/ros/messages/mod.rs``,
 checks the values set here, re-encodes and expects the same bytes; ``tests/python/
 test_cdr_fixtures.py`` regenerates them and expects the committed files, so the fixtures
 provably come from rclpy.

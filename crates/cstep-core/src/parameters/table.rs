@@ -3,9 +3,9 @@
 //!
 //! [`PARAMETERS`] drives the validation of parameter files and `-p` overrides
 //! ([`super::config`]), the node's parameter declarations and their ROS 2 descriptors
-//! (`ros::parameters`), and the table of `docs/parameters.md` and `config/cstep.yaml`, which
-//! `tests/parameter_docs.rs` writes from it (`CSTEP_WRITE_DOCS=1`) and otherwise checks, so none
-//! of them can drift from the table.
+//! (`cstep::ros::rcl::parameters`), and the table of `docs/parameters.md` and
+//! `config/cstep.yaml`, which `tests/parameter_docs.rs` writes from it (`CSTEP_WRITE_DOCS=1`)
+//! and otherwise checks, so none of them can drift from the table.
 
 use serde_norway::Value as Yaml;
 

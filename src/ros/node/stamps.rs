@@ -8,13 +8,13 @@
 //! scored. Only a scored scan moves the newest stamp, so a rejected one (malformed, far in the
 //! future or far back) never holds back or resets the scans after it.
 
-use super::messages::Time;
+use crate::ros::messages::Time;
 
 /// What a scan's stamp says about it, against the newest stamp scored.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Order {
     /// As new as every scan scored, or newer (or the first): score it.
-    InOrder,
+    Newest,
     /// Older than the newest scored by no more than the tolerance: a late delivery, skipped.
     Late,
     /// Older by more than the tolerance, by this many seconds: time jumped back. Score it; once
@@ -33,7 +33,7 @@ impl StampOrder {
     /// that time jumped back.
     pub fn check(&self, stamp: Time, tolerance: f64) -> Order {
         let Some(newest) = self.newest.filter(|newest| stamp < *newest) else {
-            return Order::InOrder;
+            return Order::Newest;
         };
         let behind = newest.seconds() - stamp.seconds();
         if behind > tolerance {
@@ -43,7 +43,7 @@ impl StampOrder {
         }
     }
 
-    /// Records that a scan stamped `stamp`, [`Order::InOrder`] or [`Order::JumpedBack`], was
+    /// Records that a scan stamped `stamp`, [`Order::Newest`] or [`Order::JumpedBack`], was
     /// scored: it is the newest now.
     pub fn scored(&mut self, stamp: Time) {
         self.newest = Some(stamp);
@@ -61,12 +61,12 @@ mod tests {
     #[test]
     fn only_scored_scans_advance_the_order() {
         let mut order = StampOrder::default();
-        assert_eq!(order.check(at(i32::MAX, 0), 1.0), Order::InOrder);
+        assert_eq!(order.check(at(i32::MAX, 0), 1.0), Order::Newest);
         // That scan was rejected (never scored): it does not hold back the next ones.
-        assert_eq!(order.check(at(10, 0), 1.0), Order::InOrder);
+        assert_eq!(order.check(at(10, 0), 1.0), Order::Newest);
         order.scored(at(10, 0));
-        assert_eq!(order.check(at(10, 0), 1.0), Order::InOrder);
-        assert_eq!(order.check(at(11, 0), 1.0), Order::InOrder);
+        assert_eq!(order.check(at(10, 0), 1.0), Order::Newest);
+        assert_eq!(order.check(at(11, 0), 1.0), Order::Newest);
     }
 
     #[test]
@@ -83,9 +83,9 @@ mod tests {
         // nothing); once one is, the order goes on from it.
         assert_eq!(order.check(at(100, 0), 1.0), Order::Late);
         order.scored(at(0, 0));
-        assert_eq!(order.check(at(0, 100), 1.0), Order::InOrder);
-        assert_eq!(order.check(at(99, 0), 1.0), Order::InOrder);
-        assert!(matches!(order.check(at(100, 0), 1.0), Order::InOrder));
+        assert_eq!(order.check(at(0, 100), 1.0), Order::Newest);
+        assert_eq!(order.check(at(99, 0), 1.0), Order::Newest);
+        assert!(matches!(order.check(at(100, 0), 1.0), Order::Newest));
     }
 
     #[test]
@@ -97,7 +97,7 @@ mod tests {
             Order::JumpedBack(_)
         ));
         order.scored(at(1000, 0));
-        assert_eq!(order.check(at(1001, 0), 1.0), Order::InOrder);
+        assert_eq!(order.check(at(1001, 0), 1.0), Order::Newest);
     }
 
     #[test]

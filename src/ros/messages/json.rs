@@ -1,7 +1,7 @@
 //! Reading a ROS message from JSON strictly: a field the message does not have is refused with
 //! its path and the known field it most likely misspells (`pose.pose.pos: unknown field, did you
 //! mean `position`?`), every other misfit with the path of the field at fault; fields left out
-//! still take their ROS defaults ([`super::messages`]).
+//! still take their ROS defaults ([`super`]).
 //!
 //! serde_json alone reports neither: with `#[serde(deny_unknown_fields)]` (which every message
 //! struct carries) its error names the field but not where it is, and without it a misspelt

@@ -12,10 +12,10 @@
 
 use nalgebra::Vector3;
 
-use super::messages::{
+use crate::rollout::Rollout;
+use crate::ros::messages::{
     ColorRGBA, Duration, Header, Marker, MarkerArray, Point, Pose, Vector3 as V3,
 };
-use crate::rollout::Rollout;
 use crate::volume::planar_hull;
 
 /// Namespace of the endpoint marker.

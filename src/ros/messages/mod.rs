@@ -1,10 +1,14 @@
 //! Serde mirrors of the ROS 2 messages cstep reads and writes.
 //!
 //! Field names and order follow the `.msg` definitions exactly: the same structs serve JSON
-//! (`cstep eval`, rosbridge-style, read by [`super::json`]) and CDR (the DDS wire format). Every
+//! (`cstep eval`, rosbridge-style, read by [`json`]) and CDR (the DDS wire format). Every
 //! field has its ROS default so hand-written JSON may leave out what it does not need, and every
 //! struct refuses a field it does not have (`deny_unknown_fields`), so a misspelt field is an
 //! error rather than silently its default. CDR carries no field names and is unaffected.
+//! [`yaml`] prints them as `ros2 topic echo` does (`cstep echo`).
+
+pub mod json;
+pub mod yaml;
 
 use ros2_client::{MessageTypeName, ServiceTypeName};
 use serde::{Deserialize, Serialize};
@@ -638,7 +642,7 @@ ros_services!(
 );
 
 /// Scalar `float32` fields that refuse, in JSON, a number no `float32` holds: a finite number
-/// beyond ±`f32::MAX` or a non-zero one that rounds to zero ([`super::json`] names the field);
+/// beyond ±`f32::MAX` or a non-zero one that rounds to zero ([`json`] names the field);
 /// binary formats (CDR) carry a `float32` already and pass through.
 mod float32 {
     use serde::de::{Deserializer, Error};

@@ -13,7 +13,7 @@ use super::NodeError;
 use crate::parameters::overrides::{ParamOverrides, ParamSource};
 use crate::parameters::Value;
 use crate::parameters::{validate, NodeSettings, ParameterSet, Parameters};
-use crate::ros::args::RosArgs;
+use crate::ros::rcl::args::RosArgs;
 
 /// The node's parameters: the built-in defaults, then the `--config` files and `--ros-args`
 /// overrides that apply to node `fqn` ([`crate::parameters::overrides`]), validated.
@@ -45,22 +45,26 @@ pub(super) fn load_parameters(
     Ok(validate(set)?)
 }
 
-/// Declares every parameter ([`crate::ros::parameters`]); a `safety_coefficient` or
-/// `input_timeout` change takes effect at the next scan. The others are read-only (they shape the control sample, the model and
-/// the topics), but `use_sim_time`, which ros2-client keeps itself ([`NodeClock`] reads it).
+/// Declares every parameter ([`crate::ros::rcl::parameters`]); a `safety_coefficient` or
+/// `input_timeout` change takes effect at the next scan. The others are read-only (they shape
+/// the control sample, the model and the topics), but `use_sim_time`, which ros2-client keeps
+/// itself ([`NodeClock`] reads it).
 pub(super) fn parameter_options(shared: &Arc<Shared>, parameters: &Parameters) -> NodeOptions {
     let live = shared.clone();
     let options = NodeOptions::new().start_parameter_services(true);
-    crate::ros::parameters::declare(options, parameters, move |p, value| match (p.name, value) {
-        ("safety_coefficient", Value::Double(c)) => {
-            *live
-                .safety_coefficient
-                .lock()
-                .unwrap_or_else(|e| e.into_inner()) = *c;
+    crate::ros::rcl::parameters::declare(options, parameters, move |p, value| {
+        match (p.name, value) {
+            ("safety_coefficient", Value::Double(c)) => {
+                *live
+                    .safety_coefficient
+                    .lock()
+                    .unwrap_or_else(|e| e.into_inner()) = *c;
+            }
+            ("input_timeout", Value::Double(t)) => {
+                *live.timeout.lock().unwrap_or_else(|e| e.into_inner()) =
+                    Duration::from_secs_f64(*t);
+            }
+            _ => {}
         }
-        ("input_timeout", Value::Double(t)) => {
-            *live.timeout.lock().unwrap_or_else(|e| e.into_inner()) = Duration::from_secs_f64(*t);
-        }
-        _ => {}
     })
 }

@@ -10,9 +10,9 @@
 //! `--disable-rosout-logs` the topic (both on by default, as in rcl). `/rosout` carries every
 //! record (`rcl_interfaces/msg/Log`: wall-clock stamp, level, logger name, message, source file,
 //! module, line) with rcl's QoS for it; unlike rcl, the records logged before the node existed
-//! (start-up: parameter overrides, ignored arguments) are held and published when it does. What cstep does not do —
-//! file logging (the external library: `--log-file-name`, `--log-config-file`) — is said once at
-//! start-up rather than silently ignored.
+//! (start-up: parameter overrides, ignored arguments) are held and published when it does.
+//! What cstep does not do — file logging (the external library: `--log-file-name`,
+//! `--log-config-file`) — is said once at start-up rather than silently ignored.
 
 use std::collections::VecDeque;
 use std::fmt::{self, Write as _};
@@ -272,7 +272,7 @@ where
             Level::INFO => "INFO",
             Level::DEBUG | Level::TRACE => "DEBUG",
         };
-        let now = super::messages::Time::wall_clock_now();
+        let now = crate::ros::messages::Time::wall_clock_now();
         write!(
             writer,
             "[{severity}] [{}.{:09}] [{}]: ",

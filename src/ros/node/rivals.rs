@@ -23,7 +23,7 @@
 use std::collections::BTreeSet;
 use std::time::Duration;
 
-use super::messages::{ros_type_of_dds, RosMessage, RosService};
+use crate::ros::messages::{ros_type_of_dds, RosMessage, RosService};
 
 /// How long after its start a node that finds a rival of unknown age refuses to go on (exits
 /// 1). Discovery between two processes on localhost takes 1–2 s, occasionally 4 s; on a loaded

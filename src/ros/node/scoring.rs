@@ -78,7 +78,7 @@ pub(super) fn score_scans(shared: &Shared, outputs: &Outputs) {
             goal: goal.as_ref(),
             in_collision: false,
         };
-        match shared.score(&query, shared.safety_coefficient(), with_markers) {
+        match query.score(shared, shared.safety_coefficient(), with_markers) {
             Ok((e, r, markers)) => {
                 debug!(
                     "scan {}.{:09}: empowerment {:.4} (valid: {}, {})",
@@ -157,36 +157,35 @@ impl<'a> Query<'a> {
             })
             .collect())
     }
-}
-impl Shared {
-    /// Scores one state with safety coefficient `c`, with the markers of the evaluation if
-    /// asked; a malformed input is an error naming the field, a String because it is the
-    /// `status` published in the rejected answer.
+
+    /// Scores this state with safety coefficient `c` on the node's estimator, with the markers
+    /// of the evaluation if asked; a malformed input is an error naming the field, a String
+    /// because it is the `status` published in the rejected answer.
     pub(super) fn score(
         &self,
-        query: &Query,
+        shared: &Shared,
         c: f64,
         with_markers: bool,
     ) -> Result<(Empowerment, EmpoweredReward, Option<MarkerArray>), String> {
         let (state, scan, goal) = admit(
-            odometry_to_state(query.odom),
-            laser_scan_to_scan(query.scan),
-            query.goal.map(goal_position).transpose(),
+            odometry_to_state(self.odom),
+            laser_scan_to_scan(self.scan),
+            self.goal.map(goal_position).transpose(),
         )?;
         let Score { estimate, reward } = score(
-            &self.estimator,
+            &shared.estimator,
             &state,
             &scan,
             goal.as_ref(),
             c,
-            query.in_collision,
+            self.in_collision,
         );
         let header = Header {
-            stamp: query.scan.header.stamp,
-            frame_id: query.odom.header.frame_id.clone(),
+            stamp: self.scan.header.stamp,
+            frame_id: self.odom.header.frame_id.clone(),
         };
         {
-            let mut latest = self.latest();
+            let mut latest = shared.latest();
             latest.scored += 1;
             latest.last_score = Some((estimate.empowerment, estimate.valid(), estimate.elapsed));
         }
@@ -195,7 +194,7 @@ impl Shared {
                 &header,
                 &state.position,
                 &estimate.rollout,
-                self.timeout().as_secs_f64(),
+                shared.timeout().as_secs_f64(),
             )
         });
         Ok((

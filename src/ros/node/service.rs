@@ -37,8 +37,8 @@ impl Job {
     /// Scores the request (a malformed one is answered `valid = false` with the reason).
     fn answer(self, shared: &Shared) -> Reply {
         match self {
-            Job::Evaluate(id, request) => Reply::Evaluate(id, shared.evaluate_request(&request)),
-            Job::Batch(id, request) => Reply::Batch(id, shared.evaluate_batch(&request)),
+            Job::Evaluate(id, request) => Reply::Evaluate(id, evaluate(shared, &request)),
+            Job::Batch(id, request) => Reply::Batch(id, evaluate_batch(shared, &request)),
         }
     }
 
@@ -51,7 +51,7 @@ impl Job {
         let c = shared.safety_coefficient();
         match self {
             Job::Evaluate(id, request) => {
-                let (empowerment, reward) = shared.rejected(request.scan.header, reason, c);
+                let (empowerment, reward) = rejected(shared, request.scan.header, reason, c);
                 Reply::Evaluate(
                     id,
                     EvaluateResponse {
@@ -65,7 +65,7 @@ impl Job {
                 let (empowerment, reward) = (0..states)
                     .map(|i| {
                         let header = request.scan.get(i).map(|s| s.header.clone());
-                        shared.rejected(header.unwrap_or_default(), reason.clone(), c)
+                        rejected(shared, header.unwrap_or_default(), reason.clone(), c)
                     })
                     .unzip();
                 Reply::Batch(
@@ -97,73 +97,76 @@ pub(super) fn answer_queued(shared: &Shared, replies: &smol::channel::Sender<Rep
     }
 }
 
-impl Shared {
-    /// The service answer for one state: its score, or for a malformed one the floor with
-    /// `valid = false` and the reason (counted as rejected).
-    fn answer(&self, query: &Query, c: f64) -> (Empowerment, EmpoweredReward) {
-        match self.score(query, c, false) {
-            Ok((empowerment, reward, _)) => (empowerment, reward),
-            Err(problem) => {
-                self.note_problem(|l| l.rejected += 1, &problem);
-                self.rejected(query.scan.header.clone(), problem, c)
-            }
+/// The service answer for one state: its score, or for a malformed one the floor with
+/// `valid = false` and the reason (counted as rejected).
+fn answer(shared: &Shared, query: &Query, c: f64) -> (Empowerment, EmpoweredReward) {
+    match query.score(shared, c, false) {
+        Ok((empowerment, reward, _)) => (empowerment, reward),
+        Err(problem) => {
+            shared.note_problem(|l| l.rejected += 1, &problem);
+            rejected(shared, query.scan.header.clone(), problem, c)
         }
     }
+}
 
-    /// The answer for a state that could not be scored: its [`unscorable`] score, `problem` as
-    /// the status, stamped with `header`; its reward is the lowest a collision can score, so
-    /// malformed input never pays better than hitting a wall.
-    fn rejected(&self, header: Header, problem: String, c: f64) -> (Empowerment, EmpoweredReward) {
-        let Score { estimate, reward } = unscorable(&self.estimator, c);
-        let empowerment = Empowerment {
-            status: problem,
-            ..empowerment_message(header.clone(), &estimate, c)
-        };
-        (
-            empowerment,
-            reward_message(header, &reward, c, estimate.valid()),
-        )
+/// The answer for a state that could not be scored: its [`unscorable`] score, `problem` as
+/// the status, stamped with `header`; its reward is the lowest a collision can score, so
+/// malformed input never pays better than hitting a wall.
+fn rejected(
+    shared: &Shared,
+    header: Header,
+    problem: String,
+    c: f64,
+) -> (Empowerment, EmpoweredReward) {
+    let Score { estimate, reward } = unscorable(&shared.estimator, c);
+    let empowerment = Empowerment {
+        status: problem,
+        ..empowerment_message(header.clone(), &estimate, c)
+    };
+    (
+        empowerment,
+        reward_message(header, &reward, c, estimate.valid()),
+    )
+}
+
+/// Answers `/cstep/evaluate`; a malformed request gets `valid = false` and the reason.
+fn evaluate(shared: &Shared, request: &EvaluateRequest) -> EvaluateResponse {
+    let query = Query {
+        odom: &request.odom,
+        scan: &request.scan,
+        goal: request.has_goal.then_some(&request.goal),
+        in_collision: false,
+    };
+    let (empowerment, reward) = answer(shared, &query, shared.safety_coefficient());
+    EvaluateResponse {
+        empowerment,
+        reward,
     }
+}
 
-    /// Answers `/cstep/evaluate`; a malformed request gets `valid = false` and the reason.
-    pub(super) fn evaluate_request(&self, request: &EvaluateRequest) -> EvaluateResponse {
-        let query = Query {
-            odom: &request.odom,
-            scan: &request.scan,
-            goal: request.has_goal.then_some(&request.goal),
-            in_collision: false,
-        };
-        let (empowerment, reward) = self.answer(&query, self.safety_coefficient());
-        EvaluateResponse {
-            empowerment,
-            reward,
+/// Answers `/cstep/evaluate_batch`: each state exactly as [`evaluate`] would
+/// answer it alone (one safety coefficient for the whole batch), the states scored in
+/// parallel on rayon's pool. When the request's arrays disagree in length, every state
+/// (as many as the longer of `odom` and `scan`) is answered `valid = false` with the reason.
+fn evaluate_batch(shared: &Shared, request: &EvaluateBatchRequest) -> EvaluateBatchResponse {
+    let c = shared.safety_coefficient();
+    let answers: Vec<_> = match Query::batch(request) {
+        Ok(queries) => queries.par_iter().map(|q| answer(shared, q, c)).collect(),
+        Err(problem) => {
+            shared.note_problem(|l| l.rejected += 1, &problem);
+            let states = request.odom.len().max(request.scan.len());
+            (0..states)
+                .map(|i| {
+                    let header = request.scan.get(i).map(|s| s.header.clone());
+                    rejected(shared, header.unwrap_or_default(), problem.clone(), c)
+                })
+                .collect()
         }
-    }
-
-    /// Answers `/cstep/evaluate_batch`: each state exactly as [`Self::evaluate_request`] would
-    /// answer it alone (one safety coefficient for the whole batch), the states scored in
-    /// parallel on rayon's pool. When the request's arrays disagree in length, every state
-    /// (as many as the longer of `odom` and `scan`) is answered `valid = false` with the reason.
-    pub(super) fn evaluate_batch(&self, request: &EvaluateBatchRequest) -> EvaluateBatchResponse {
-        let c = self.safety_coefficient();
-        let answers: Vec<_> = match Query::batch(request) {
-            Ok(queries) => queries.par_iter().map(|q| self.answer(q, c)).collect(),
-            Err(problem) => {
-                self.note_problem(|l| l.rejected += 1, &problem);
-                let states = request.odom.len().max(request.scan.len());
-                (0..states)
-                    .map(|i| {
-                        let header = request.scan.get(i).map(|s| s.header.clone());
-                        self.rejected(header.unwrap_or_default(), problem.clone(), c)
-                    })
-                    .collect()
-            }
-        };
-        let (empowerment, reward) = answers.into_iter().unzip();
-        EvaluateBatchResponse {
-            empowerment,
-            reward,
-        }
+    };
+    let (empowerment, reward) = answers.into_iter().unzip();
+    EvaluateBatchResponse {
+        empowerment,
+        reward,
     }
 }
 
@@ -251,10 +254,10 @@ mod tests {
     fn a_batch_answers_each_state_as_the_single_service_does() {
         let node = shared(0.7);
         let request = batch();
-        let answer = node.evaluate_batch(&request);
+        let answer = evaluate_batch(&node, &request);
         assert_eq!(answer.empowerment.len(), 4);
         for i in 0..4 {
-            let alone = node.evaluate_request(&single(&request, i));
+            let alone = evaluate(&node, &single(&request, i));
             assert_eq!(answer.empowerment[i], alone.empowerment, "state {i}");
             assert_eq!(answer.reward[i], alone.reward, "state {i}");
             assert!(alone.empowerment.valid, "{:?}", alone.empowerment);
@@ -273,7 +276,7 @@ mod tests {
         let node = shared(c);
         let mut request = batch();
         request.in_collision = vec![false, true, false, false];
-        let answer = node.evaluate_batch(&request);
+        let answer = evaluate_batch(&node, &request);
         let (e, r) = (&answer.empowerment[1], &answer.reward[1]);
         assert_eq!(e.empowerment, EMPOWERMENT_FLOOR);
         assert!(!e.valid && !r.valid);
@@ -284,7 +287,7 @@ mod tests {
         assert_eq!(r.empowerment_term, c.ln() + EMPOWERMENT_FLOOR);
         assert_eq!(r.reward, r.task_reward * r.empowerment_term);
         // The other states are untouched by their neighbour's collision.
-        let alone = node.evaluate_request(&single(&request, 2));
+        let alone = evaluate(&node, &single(&request, 2));
         assert_eq!(answer.empowerment[2], alone.empowerment);
     }
 
@@ -295,7 +298,7 @@ mod tests {
         request.scan[1].angle_increment = 0.0;
         request.odom[2].pose.pose.orientation.w = 0.0;
         request.goal[3].x = f64::NAN;
-        let answer = node.evaluate_batch(&request);
+        let answer = evaluate_batch(&node, &request);
         assert!(answer.empowerment[0].valid);
         for (i, field) in [
             (1, "scan: angle_increment"),
@@ -323,10 +326,10 @@ mod tests {
             request.in_collision = vec![true, true, false, false];
             request.scan[2].angle_increment = 0.0;
             request.odom[3].pose.pose.position.x = f64::NAN;
-            let answer = node.evaluate_batch(&request);
+            let answer = evaluate_batch(&node, &request);
             let mut single = single(&request, 3);
             single.scan.range_max = -1.0;
-            let alone = node.evaluate_request(&single).reward;
+            let alone = evaluate(&node, &single).reward;
             let collisions = &answer.reward[..2];
             for (i, r) in answer.reward[2..].iter().chain([&alone]).enumerate() {
                 assert!(!r.valid);
@@ -364,7 +367,7 @@ mod tests {
         for (spoil, status) in cases {
             let mut request = batch();
             spoil(&mut request);
-            let answer = node.evaluate_batch(&request);
+            let answer = evaluate_batch(&node, &request);
             assert_eq!(answer.empowerment.len(), 4, "{status}");
             assert_eq!(answer.reward.len(), 4, "{status}");
             for e in &answer.empowerment {
@@ -372,7 +375,7 @@ mod tests {
                 assert_eq!(e.empowerment, EMPOWERMENT_FLOOR);
             }
         }
-        let empty = node.evaluate_batch(&EvaluateBatchRequest::default());
+        let empty = evaluate_batch(&node, &EvaluateBatchRequest::default());
         assert!(empty.empowerment.is_empty() && empty.reward.is_empty());
     }
 }

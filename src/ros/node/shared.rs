@@ -1,5 +1,10 @@
-//! The state the DDS side and the scoring thread share: the estimator, the live safety
-//! coefficient and input timeout, the newest inputs and running counts, and the one-slot scan mailbox.
+//! The state the node's threads share — the DDS side, the scoring thread and the service
+//! worker: the estimator, the live safety coefficient and input timeout, the newest inputs and
+//! running counts, the one-slot scan mailbox and the services' request queue.
+//!
+//! Only the state and its bookkeeping live here (the one `impl Shared`); what each thread does
+//! with it is a concept of its own, in its own file: scoring a state ([`super::scoring`]),
+//! answering the services ([`super::service`]) and reporting health ([`super::diagnostics`]).
 
 use std::sync::atomic::AtomicBool;
 use std::sync::{Arc, Condvar, Mutex};

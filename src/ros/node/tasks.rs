@@ -11,7 +11,7 @@ use ros2_client::{Message, Node, RmwRequestId, Server};
 use tracing::warn;
 
 use super::clock::NodeClock;
-use super::diagnostics::StatusIdentity;
+use super::diagnostics::{self, StatusIdentity};
 use super::guard::Guard;
 use super::ports::Ports;
 use super::rivals::{self, Verdict};
@@ -110,7 +110,7 @@ pub(super) async fn serve(
             // Diagnostics are best effort: a full queue must not stop the node.
             let _ = ports
                 .diagnostics
-                .publish(shared.diagnostics(status, clock.now(node)));
+                .publish(diagnostics::report(shared, status, clock.now(node)));
         }
     };
     let rivals = async {

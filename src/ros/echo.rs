@@ -58,7 +58,8 @@ pub enum EchoError {
         /// The topic, as given.
         topic: String,
         /// ros2-client's reason.
-        reason: String,
+        #[source]
+        reason: ros2_client::names::NameError,
     },
     /// `--type` names no type cstep can print.
     #[error(transparent)]
@@ -68,10 +69,10 @@ pub enum EchoError {
     Context(#[from] ContextError),
     /// The echo node's name is not a valid ROS name.
     #[error("node name: {0}")]
-    NodeName(String),
+    NodeName(#[source] ros2_client::names::NameError),
     /// ros2-client could not create the echo node.
     #[error("cannot create the echo node: {0}")]
-    CreateNode(String),
+    CreateNode(#[source] ros2_client::NodeCreateError),
     /// No `--type`, not one of cstep's topics, and no publisher found within `waited`.
     #[error(
         "cannot tell the type of {topic}: no publisher found within {:.0} s and it is not one of \
@@ -110,7 +111,8 @@ pub enum EchoError {
         /// The topic.
         topic: String,
         /// ros2-client's reason.
-        reason: String,
+        #[source]
+        reason: ros2_client::CreateError,
     },
     /// The subscription could not be created.
     #[error("cannot subscribe to {topic}: {reason}")]
@@ -118,14 +120,15 @@ pub enum EchoError {
         /// The topic.
         topic: String,
         /// ros2-client's reason.
-        reason: String,
+        #[source]
+        reason: ros2_client::CreateError,
     },
     /// The Ctrl-C handler could not be installed (one is already, say).
     #[error("cannot install the Ctrl-C handler: {0}")]
     CtrlC(ctrlc::Error),
-    /// The DDS spinner could not be started; ros2-client's reason.
-    #[error("{0}")]
-    Spinner(String),
+    /// The DDS spinner could not be started.
+    #[error("cannot start the echo node's DDS event loop: {0}")]
+    Spinner(#[source] ros2_client::CreateError),
     /// A received message could not be written as YAML.
     #[error("cannot print a message: {0}")]
     Print(yaml::Error),
@@ -316,9 +319,9 @@ pub fn echo(options: &EchoOptions, out: &mut dyn Write) -> Result<(), EchoError>
         return Err(EchoError::ZeroCount);
     }
     let topic = resolve("/", options.topic.trim());
-    Name::parse(&topic).map_err(|e| EchoError::TopicName {
+    Name::parse(&topic).map_err(|reason| EchoError::TopicName {
         topic: options.topic.clone(),
-        reason: format!("{e:?}"),
+        reason,
     })?;
     let given = options
         .type_name
@@ -331,10 +334,10 @@ pub fn echo(options: &EchoOptions, out: &mut dyn Write) -> Result<(), EchoError>
     let node_name = format!("cstep_echo_{}", std::process::id());
     let mut node = context
         .new_node(
-            NodeName::new("/", &node_name).map_err(|e| EchoError::NodeName(format!("{e:?}")))?,
+            NodeName::new("/", &node_name).map_err(EchoError::NodeName)?,
             NodeOptions::new().enable_rosout(false),
         )
-        .map_err(|e| EchoError::CreateNode(format!("{e:?}")))?;
+        .map_err(EchoError::CreateNode)?;
 
     let kind = match given.or_else(|| EchoType::of_cstep_topic(&topic)) {
         Some(kind) => kind,
@@ -362,9 +365,9 @@ pub fn echo(options: &EchoOptions, out: &mut dyn Write) -> Result<(), EchoError>
             kind.type_name(),
             &qos,
         )
-        .map_err(|e| EchoError::Topic {
+        .map_err(|reason| EchoError::Topic {
             topic: topic.clone(),
-            reason: format!("{e:?}"),
+            reason,
         })?;
 
     let run = Run {
@@ -438,9 +441,9 @@ impl Run<'_> {
     ) -> Result<(), EchoError> {
         let subscription = node
             .create_subscription::<M>(topic, Some(qos))
-            .map_err(|e| EchoError::Subscribe {
+            .map_err(|reason| EchoError::Subscribe {
                 topic: self.topic.to_owned(),
-                reason: format!("{e:?}"),
+                reason,
             })?;
         let stop = Arc::new(AtomicBool::new(false));
         {
@@ -450,11 +453,7 @@ impl Run<'_> {
         }
         let executor = smol::LocalExecutor::new();
         executor
-            .spawn(
-                node.spinner()
-                    .map_err(|e| EchoError::Spinner(format!("{e:?}")))?
-                    .spin(),
-            )
+            .spawn(node.spinner().map_err(EchoError::Spinner)?.spin())
             .detach();
 
         let mut received: u64 = 0;
@@ -487,7 +486,7 @@ impl Run<'_> {
                             }
                         }
                         Err(e) => eprintln!(
-                            "cstep echo: skipped a message on {} that is not a {}: {e:?}",
+                            "cstep echo: skipped a message on {} that is not a {}: {e}",
                             self.topic,
                             self.kind.name()
                         ),

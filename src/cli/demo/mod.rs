@@ -44,23 +44,24 @@ pub enum DemoError {
     /// The drone's DDS context could not be set up from the environment.
     #[error(transparent)]
     Context(#[from] ContextError),
-    /// ros2-client refuses one of the drone's fixed node or topic names; its reason.
+    /// ros2-client refuses one of the drone's fixed node or topic names.
     #[error("{0}")]
-    Name(String),
+    Name(#[source] ros2_client::names::NameError),
     /// ros2-client could not create the drone's node.
     #[error("cannot create the demo drone node: {0}")]
-    DroneNode(String),
+    DroneNode(#[source] ros2_client::NodeCreateError),
     /// The DDS topic could not be created.
     #[error("topic {name}: {reason}")]
     Topic {
         /// The topic.
         name: String,
         /// ros2-client's reason.
-        reason: String,
+        #[source]
+        reason: ros2_client::CreateError,
     },
     /// A publisher, subscription or the spinner of the drone could not be created.
     #[error("demo drone: {0}")]
-    Drone(String),
+    Drone(#[source] ros2_client::CreateError),
     /// The node's topics were not discovered in time.
     #[error("the node did not appear on DDS within 20 s")]
     NodeNotFound,
@@ -150,24 +151,23 @@ fn fly(args: &DemoArgs, stop: &std::sync::atomic::AtomicBool) -> Result<Vec<Scor
     let context = context_from_env(false)?;
     let mut node = context
         .new_node(
-            NodeName::new("/", "cstep_demo_drone")
-                .map_err(|e| DemoError::Name(format!("{e:?}")))?,
+            NodeName::new("/", "cstep_demo_drone").map_err(DemoError::Name)?,
             NodeOptions::new().enable_rosout(false),
         )
-        .map_err(|e| DemoError::DroneNode(format!("{e:?}")))?;
+        .map_err(DemoError::DroneNode)?;
     let reliable = QosProfile::publisher_default()
         .reliability_reliable(WhenFull::Wait(Duration::from_millis(10)))
         .durability(Durability::Volatile)
         .history(History::KeepLast { depth: 50 });
     let topic = |name: &str, type_name: MessageTypeName| {
         node.create_topic(
-            &Name::parse(name).map_err(|e| DemoError::Name(format!("{e:?}")))?,
+            &Name::parse(name).map_err(DemoError::Name)?,
             type_name,
             &reliable,
         )
-        .map_err(|e| DemoError::Topic {
+        .map_err(|reason| DemoError::Topic {
             name: name.to_owned(),
-            reason: format!("{e:?}"),
+            reason,
         })
     };
     let odom_topic = topic("/odom", Odometry::type_name())?;
@@ -175,7 +175,7 @@ fn fly(args: &DemoArgs, stop: &std::sync::atomic::AtomicBool) -> Result<Vec<Scor
     let empowerment_topic = topic("/cstep/empowerment", Empowerment::type_name())?;
     let reward_topic = topic("/cstep/reward", EmpoweredReward::type_name())?;
     let goal_topic = topic("/goal_pose", PoseStamped::type_name())?;
-    let fail = |e| DemoError::Drone(format!("{e:?}"));
+    let fail = DemoError::Drone;
     let odom_pub = node
         .create_publisher::<Odometry>(&odom_topic, None)
         .map_err(fail)?;

@@ -35,10 +35,10 @@ pub enum NodeError {
     Context(#[from] ContextError),
     /// The node's name or namespace is not a valid ROS name.
     #[error("node name: {0}")]
-    NodeName(String),
+    NodeName(#[source] ros2_client::names::NameError),
     /// ros2-client could not create the node.
     #[error("cannot create the node: {0}")]
-    CreateNode(String),
+    CreateNode(#[source] ros2_client::NodeCreateError),
     /// A topic or service name does not resolve (`--ros-args` remapping, namespace).
     #[error(transparent)]
     ResolveName(#[from] NameError),
@@ -66,7 +66,8 @@ pub enum NodeError {
         /// The topic name.
         name: String,
         /// ros2-client's reason.
-        reason: String,
+        #[source]
+        reason: ros2_client::names::NameError,
     },
     /// A resolved service name ros2-client does not accept.
     #[error("service name \"{}\": {reason}", excerpt(name))]
@@ -74,7 +75,8 @@ pub enum NodeError {
         /// The service name.
         name: String,
         /// ros2-client's reason.
-        reason: String,
+        #[source]
+        reason: ros2_client::names::NameError,
     },
     /// The DDS topic could not be created.
     #[error("topic {name}: {reason}")]
@@ -82,7 +84,8 @@ pub enum NodeError {
         /// The topic name.
         name: String,
         /// ros2-client's reason.
-        reason: String,
+        #[source]
+        reason: ros2_client::CreateError,
     },
     /// A subscription, publisher or server could not be created.
     #[error("cannot create {what}: {reason}")]
@@ -90,11 +93,12 @@ pub enum NodeError {
         /// What, e.g. "the odometry subscription".
         what: &'static str,
         /// ros2-client's reason.
-        reason: String,
+        #[source]
+        reason: ros2_client::CreateError,
     },
     /// The DDS spinner could not be started.
-    #[error("{0}")]
-    Spinner(String),
+    #[error("cannot start the node's DDS event loop: {0}")]
+    Spinner(#[source] ros2_client::CreateError),
     /// The scoring thread panicked.
     #[error("the scoring thread failed")]
     ScoringThread,

@@ -101,11 +101,10 @@ pub fn run(config: &[PathBuf], ros_args: &RosArgs, stop: Arc<AtomicBool>) -> Res
         parameter_options(&shared, &parameters).enable_rosout(ros_args.rosout_logs != Some(false));
     let mut node = context
         .new_node(
-            NodeName::new(&namespace, &node_name)
-                .map_err(|e| NodeError::NodeName(format!("{e:?}")))?,
+            NodeName::new(&namespace, &node_name).map_err(NodeError::NodeName)?,
             options,
         )
-        .map_err(|e| NodeError::CreateNode(format!("{e:?}")))?;
+        .map_err(NodeError::CreateNode)?;
     rosout.attach(node.logging_handle());
     let ports = Ports::open(&mut node, &names)?;
     let guard = Guard {
@@ -166,11 +165,7 @@ pub fn run(config: &[PathBuf], ros_args: &RosArgs, stop: Arc<AtomicBool>) -> Res
     };
     let executor = smol::LocalExecutor::new();
     executor
-        .spawn(
-            node.spinner()
-                .map_err(|e| NodeError::Spinner(format!("{e:?}")))?
-                .spin(),
-        )
+        .spawn(node.spinner().map_err(NodeError::Spinner)?.spin())
         .detach();
     let clock = NodeClock::default();
     smol::block_on(executor.run(serve(

@@ -6,7 +6,9 @@ use std::time::Duration;
 
 use ros2_client::dds::rustdds::Topic;
 use ros2_client::qos::{Durability, History, WhenFull};
-use ros2_client::{Name, Node, Publisher, QosProfile, Server, ServiceMapping, ServiceTypeName};
+use ros2_client::{
+    CreateError, Name, Node, Publisher, QosProfile, Server, ServiceMapping, ServiceTypeName,
+};
 
 use super::NodeError;
 use crate::parameters::NodeSettings;
@@ -261,30 +263,27 @@ impl Ports {
 
 /// The topic `name` of message type `M` (its ROS type name from [`RosMessage`]), with `qos`.
 fn topic<M: RosMessage>(node: &Node, name: &str, qos: &QosProfile) -> Result<Topic, NodeError> {
-    let parsed = Name::parse(name).map_err(|e| NodeError::TopicName {
+    let parsed = Name::parse(name).map_err(|reason| NodeError::TopicName {
         name: name.to_owned(),
-        reason: format!("{e:?}"),
+        reason,
     })?;
     node.create_topic(&parsed, M::type_name(), qos)
-        .map_err(|e| NodeError::Topic {
+        .map_err(|reason| NodeError::Topic {
             name: name.to_owned(),
-            reason: format!("{e:?}"),
+            reason,
         })
 }
 
 /// The parsed name `name` of service `S` and its ROS type name (from [`RosService`]).
 fn service<S: RosService>(name: &str) -> Result<(Name, ServiceTypeName), NodeError> {
-    let parsed = Name::parse(name).map_err(|e| NodeError::ServiceName {
+    let parsed = Name::parse(name).map_err(|reason| NodeError::ServiceName {
         name: name.to_owned(),
-        reason: format!("{e:?}"),
+        reason,
     })?;
     Ok((parsed, S::type_name()))
 }
 
 /// An error mapper for creating the named entity.
-pub(super) fn failed<E: std::fmt::Debug>(what: &'static str) -> impl FnOnce(E) -> NodeError {
-    move |e| NodeError::Create {
-        what,
-        reason: format!("{e:?}"),
-    }
+pub(super) fn failed(what: &'static str) -> impl FnOnce(CreateError) -> NodeError {
+    move |reason| NodeError::Create { what, reason }
 }

@@ -110,7 +110,7 @@ impl SpeedLimiter {
                 "speed limit release at stop not acknowledged within {} s",
                 RELEASE_ACK_WAIT.as_secs_f64()
             )),
-            Err(e) => Err(format!("speed limit release at stop: {e:?}")),
+            Err(e) => Err(format!("speed limit release at stop: {e}")),
         }
     }
 
@@ -133,7 +133,7 @@ impl SpeedLimiter {
         };
         self.publisher
             .publish(message)
-            .map_err(|e| format!("publishing a speed limit failed: {e:?}"))?;
+            .map_err(|e| format!("publishing a speed limit failed: {e}"))?;
         state.holding = limit != Limit::RELEASED;
         Ok(())
     }

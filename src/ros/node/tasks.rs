@@ -240,7 +240,7 @@ async fn send_replies(
             if let Err(e) = result {
                 shared.note_problem(
                     |l| l.replies_failed += 1,
-                    &format!("{name} reply to {id:?} failed: {e:?}"),
+                    &format!("{name} reply to {id:?} failed: {e}"),
                 );
             }
         })

@@ -89,7 +89,7 @@ pub struct Discovery {
 }
 
 /// Why the DDS context could not be set up from the environment.
-#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[derive(Debug, thiserror::Error)]
 pub enum ContextError {
     /// `ROS_DOMAIN_ID` is not a domain rcl accepts; the value as set.
     #[error("ROS_DOMAIN_ID must be 0–232, got \"{}\"", excerpt(.0))]
@@ -103,11 +103,12 @@ pub enum ContextError {
         /// The domain.
         domain: u16,
         /// RustDDS's reason.
-        reason: String,
+        #[source]
+        reason: ros2_client::dds::rustdds::dds::CreateError,
     },
     /// ros2-client could not build its context on the participant.
     #[error("ROS context: {0}")]
-    RosContext(String),
+    RosContext(#[source] ros2_client::CreateError),
 }
 
 impl Discovery {
@@ -258,12 +259,8 @@ pub fn context_from_env(always_announce: bool) -> Result<Context, ContextError> 
         .automatic_discovery_range(discovery.range.dds())
         .with_static_peers(discovery.peer_addresses()?)
         .build()
-        .map_err(|e| ContextError::JoinDomain {
-            domain,
-            reason: format!("{e:?}"),
-        })?;
-    Context::from_domain_participant(participant)
-        .map_err(|e| ContextError::RosContext(format!("{e:?}")))
+        .map_err(|reason| ContextError::JoinDomain { domain, reason })?;
+    Context::from_domain_participant(participant).map_err(ContextError::RosContext)
 }
 
 /// The absolute form of a topic or service name: relative names live in `namespace`.

@@ -1,5 +1,5 @@
-//! Quoting what a user gave in an error without echoing all of it: a 60 000-character name or a
-//! 15 MiB value once came back whole in a one-line error. [`excerpt`] keeps the first
+//! Quoting what a user gave in an error without echoing all of it, so that a 60 000-character
+//! name or a 15 MiB value still makes a one-line error. [`excerpt`] keeps the first
 //! [`EXCERPT_CHARS`] characters and says how long the whole was.
 
 use std::borrow::Cow;

@@ -19,9 +19,8 @@ use crate::state::RobotState;
 /// Trajectories integrated together in one cache-resident block; blocks run in parallel on
 /// rayon's pool. A quadrotor lane keeps about 24 `f32` in play (state, actuation, commands; its
 /// RK4 runs fused over 32-lane chunks), so 160 lanes (15 KiB) stay well within a 48 KiB L1 data
-/// cache. (With the generic RK4's three scratch batches a lane held about 63 `f32`, and 256
-/// lanes spilled to L2: 2000 quadrotor lanes on one core took 5.9 ms against 5.1 ms.) A
-/// multiple of the collision checks' 16-lane chunks.
+/// cache; blocks that spill to L2 are measurably slower. A multiple of the collision checks'
+/// 16-lane chunks.
 const BLOCK_LANES: usize = 160;
 
 /// Where each trajectory ended and whether it collided on the way.

@@ -5,7 +5,7 @@
 //!
 //! serde_json alone reports neither: with `#[serde(deny_unknown_fields)]` (which every message
 //! struct carries) its error names the field but not where it is, and without it a misspelt
-//! field is silently dropped and its default scored — `"pos"` for `"position"` was once scored
+//! field is silently dropped and its default scored — `"pos"` for `"position"` would be scored
 //! as a robot at the origin. So the text is parsed into a [`serde_json::Value`] first (syntax
 //! errors keep serde_json's line and column) and the message is then read from that value by a
 //! deserializer that knows each value's path and whose error type catches unknown fields with

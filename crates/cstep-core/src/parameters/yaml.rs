@@ -3,7 +3,7 @@
 //! `serde_norway` hands the whole text to libyaml and builds the value only once every event of
 //! the document is in memory, and libyaml itself is not linear on every input: each token costs
 //! as many steps as the flow collections (`[`, `{`) it sits in, so 200 000 nested `[` (a
-//! 200 KB file) took minutes to be refused; and each `%TAG` directive is compared with every
+//! 200 KB file) would take minutes to be refused; and each `%TAG` directive is compared with every
 //! earlier one. Aliases multiply: ten anchors of ten aliases each expand to 10¹⁰ values (the
 //! "billion laughs"). And a value nested under long keys becomes a long dotted name, once per
 //! value beneath them.

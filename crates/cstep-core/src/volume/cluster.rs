@@ -14,22 +14,10 @@ use super::neighbours::NeighbourGrid;
 ///
 /// Larger k lets links reach over thin bands of free endpoints and merge separate obstacles
 /// (whose hull then swallows the free band); smaller k fragments thin terminal layers into
-/// pieces whose hulls leave gaps. Measured by the ignored test `link_neighbours_study` on 3000 uniform
-/// endpoints in [-1, 1]^d, 40 seeds, s = mean endpoint spacing; "split" = a terminal slab 3 s or
-/// 5 s thick falls apart into pieces of more than 5 points; "merged" = two terminal half-spaces
-/// are joined across a free band of the given width:
-///
-/// | k | 2D split | 2D merged 1.5 s / 2 s | 3D split | 3D merged 1.5 s / 2 s | 3D fragments/run |
-/// |---|----------|-----------------------|----------|-----------------------|------------------|
-/// | 4 | 86 %     | 13 % / 0 %            | 10 %     | 3 % / 0 %             | 6.7              |
-/// | 6 | 50 %     | 73 % / 5 %            | 0 %      | 8 % / 0 %             | 1.3              |
-/// | 8 | 26 %     | 100 % / 15 %          | 0 %      | 15 % / 0 %            | 0.3              |
-///
-/// k = 8 halves the 2D splitting of k = 6 (the `2·dims + 2` rule) while free bands two spacings
-/// wide still separate clusters in 85 % of runs (k = 10, measured with a larger `neighbours::MAX_K`:
-/// 16 % split but 58 % merged at 2 s). In 3D, k = 8 leaves a quarter of k = 6's small fragments
-/// and still never bridges 2 s. Bands narrower than two spacings are not resolved by the
-/// sample anyway.
+/// pieces whose hulls leave gaps. 8 splits thin terminal layers least while free bands two
+/// endpoint spacings wide still keep clusters apart; the ignored test `link_neighbours_study`
+/// measures the trade-off (results in `docs/results/protocol.md`, "Moved from the code's
+/// comments").
 pub(crate) const LINK_NEIGHBOURS: usize = 8;
 
 /// Terminal endpoints grouped into clusters: each cluster is a list of endpoint indices.

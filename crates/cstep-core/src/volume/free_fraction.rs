@@ -24,9 +24,9 @@ use super::strips::{Band, Strips};
 /// Columns across a 2D hull. The free length along a column is a continuous, piecewise smooth
 /// function of the column position, so the midpoint rule converges fast: against a
 /// 4096-column reference, 32 columns err by at most 0.004 in the free fraction on the test
-/// scenes (16: 0.015, 64: 0.003, 128: 0.0007; see `column_count_converges`). That matches a
-/// 32 × 32 probe lattice across and is exact along each column, for most of the volumes'
-/// ~14 µs at 150 endpoints (`cargo run --release --example profile_stages`).
+/// scenes (`column_count_converges`). That matches a 32 × 32 probe lattice across and is exact
+/// along each column; the columns are most of the volumes' cost
+/// (`cargo run --release --example profile_stages`).
 pub(crate) const COLUMNS_2D: usize = 32;
 
 /// Columns per axis across a 3D hull (24² = 576 lines): at most 0.003 off a 256²-column

@@ -212,7 +212,7 @@ impl Parameters {
     }
 
     /// The word set for `name`, parsed by `parse`: the table's choices are exactly the words
-    /// `parse` knows (`table::tests`).
+    /// `parse` knows (`settings::tests::table_choices_are_the_names_the_code_parses`).
     pub(super) fn choice<T>(&self, name: &str, parse: impl Fn(&str) -> Option<T>) -> T {
         let word = self.text(name);
         parse(word).unwrap_or_else(|| unreachable!("'{name}': the table allows {word}"))

@@ -322,6 +322,29 @@ mod tests {
     }
 
     #[test]
+    fn table_choices_are_the_names_the_code_parses() {
+        type Parses = fn(&str) -> bool;
+        let parsers: [(&str, Parses); 4] = [
+            ("model", |w| ModelKind::from_name(w).is_some()),
+            ("sampler", |w| SamplerKind::from_name(w).is_some()),
+            ("estimator", |w| EstimatorKind::from_name(w).is_some()),
+            ("unknown_space", |w| UnknownSpace::from_name(w).is_some()),
+        ];
+        for p in crate::parameters::PARAMETERS {
+            let crate::parameters::Rule::Choice(words) = p.rule else {
+                continue;
+            };
+            let (_, parses) = parsers
+                .iter()
+                .find(|(name, _)| *name == p.name)
+                .unwrap_or_else(|| panic!("'{}' is a choice no setting reads", p.name));
+            for &word in words {
+                assert!(parses(word), "'{}': the table allows {word}", p.name);
+            }
+        }
+    }
+
+    #[test]
     fn builtin_defaults_are_the_papers_settings() {
         let s = Settings::builtin();
         assert_eq!(s.model, ModelKind::Quadrotor);

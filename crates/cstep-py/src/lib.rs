@@ -1,7 +1,7 @@
 //! `cstep_scoring`: C-STEP empowerment and the empowered reward for batches of robot states,
 //! from NumPy arrays, without ROS.
 //!
-//! [`Scorer::score_batch`] admits each state with the core's input checks
+//! `Scorer.score_batch` admits each state with the core's input checks
 //! ([`cstep_core::input`], [`cstep_core::scoring::admit`]) and scores it with
 //! [`cstep_core::scoring::score`] — the step the node's `/cstep/evaluate_batch` service takes —
 //! or answers it with [`cstep_core::scoring::unscorable`] and the reason, as the service does;

@@ -13,11 +13,12 @@ use std::path::Path;
 
 use approx::assert_relative_eq;
 use byteorder::LittleEndian;
+use cstep::ros::messages::point_cloud::cloud_points;
 use cstep::ros::messages::{
     ColorRGBA, CompressedImage, DiagnosticArray, Duration, EmpoweredReward, Empowerment,
     EvaluateBatchRequest, EvaluateBatchResponse, EvaluateRequest, EvaluateResponse, Header,
-    LaserScan, Marker, MarkerArray, MeshFile, Odometry, Point, Pose, PoseStamped, Quaternion, Time,
-    UVCoordinate, Vector3,
+    LaserScan, Marker, MarkerArray, MeshFile, Odometry, Point, PointCloud2, Pose, PoseStamped,
+    Quaternion, Time, UVCoordinate, Vector3,
 };
 use serde::de::DeserializeOwned;
 use serde::Serialize;
@@ -26,7 +27,7 @@ use serde::Serialize;
 const CDR_LE: [u8; 4] = [0x00, 0x01, 0x00, 0x00];
 
 /// Every fixture file; `every_fixture_file_is_tested` keeps this list complete.
-const FIXTURES: [&str; 13] = [
+const FIXTURES: [&str; 15] = [
     "diagnostic_array",
     "empowered_reward",
     "empowerment",
@@ -39,6 +40,8 @@ const FIXTURES: [&str; 13] = [
     "laser_scan_empty",
     "marker_array",
     "odometry",
+    "point_cloud2",
+    "point_cloud2_big_endian",
     "pose_stamped",
 ];
 
@@ -186,6 +189,28 @@ fn laser_scan_with_inf_nan_and_negative_inf_round_trips() {
     // CDR is a binary format: `lenient_floats` (JSON's null/"inf" stand-ins) must pass the
     // f32 sequence through untouched, NaN bits included (the re-encoding check covers them).
     check_laser_scan(&decode::<LaserScan>("laser_scan"));
+}
+
+#[test]
+fn point_clouds_in_either_byte_order_round_trip_and_give_their_points() {
+    // tests/data/cdr/generate.py's CLOUD_POINTS (x, y, z; intensity is not read).
+    let expected = [[1.5, 0.0, 0.1], [-0.5, 2.25, -0.05], [f32::NAN; 3]];
+    for (name, big_endian) in [("point_cloud2", false), ("point_cloud2_big_endian", true)] {
+        let cloud: PointCloud2 = decode(name);
+        assert_eq!(cloud.header, header(7, 250_000_000, "lidar"), "{name}");
+        assert_eq!((cloud.height, cloud.width, cloud.point_step), (1, 3, 16));
+        assert_eq!((cloud.is_bigendian, cloud.is_dense), (big_endian, false));
+        let names: Vec<&str> = cloud.fields.iter().map(|f| f.name.as_str()).collect();
+        assert_eq!(names, ["x", "y", "z", "intensity"]);
+        let points = cloud_points(&cloud, 1000).unwrap();
+        assert_eq!(points.len(), 3, "{name}");
+        for (got, want) in points.iter().flatten().zip(expected.iter().flatten()) {
+            assert!(
+                got == want || (got.is_nan() && want.is_nan()),
+                "{name}: {points:?}"
+            );
+        }
+    }
 }
 
 #[test]

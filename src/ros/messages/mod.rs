@@ -8,7 +8,10 @@
 //! [`yaml`] prints them as `ros2 topic echo` does (`cstep echo`).
 
 pub mod json;
+pub mod point_cloud;
 pub mod yaml;
+
+pub use point_cloud::{PointCloud2, PointField};
 
 use ros2_client::{MessageTypeName, ServiceTypeName};
 use serde::{Deserialize, Serialize};
@@ -615,6 +618,7 @@ ros_messages!(
     Clock => "rosgraph_msgs" / "Clock",
     Odometry => "nav_msgs" / "Odometry",
     LaserScan => "sensor_msgs" / "LaserScan",
+    PointCloud2 => "sensor_msgs" / "PointCloud2",
     PoseStamped => "geometry_msgs" / "PoseStamped",
     Empowerment => "cstep_msgs" / "Empowerment",
     EmpoweredReward => "cstep_msgs" / "EmpoweredReward",

@@ -38,7 +38,7 @@ from rosidl_parser.definition import (
     BasicType,
     NamespacedType,
 )
-from sensor_msgs.msg import CompressedImage, LaserScan
+from sensor_msgs.msg import CompressedImage, LaserScan, PointCloud2, PointField
 from std_msgs.msg import ColorRGBA, Header
 from visualization_msgs.msg import Marker, MarkerArray, MeshFile, UVCoordinate
 
@@ -315,6 +315,40 @@ def marker_array() -> MarkerArray:
 
 
 # File stem -> message factory. The Rust test reads the same names.
+# The points of the cloud fixtures: (x, y, z, intensity); the NaN point is a missing return.
+CLOUD_POINTS = [
+    (1.5, 0.0, 0.1, 10.0),
+    (-0.5, 2.25, -0.05, 20.0),
+    (math.nan, math.nan, math.nan, 0.0),
+]
+
+
+def point_cloud(big_endian: bool) -> PointCloud2:
+    """An unordered cloud of ``CLOUD_POINTS`` as FLOAT32 x, y, z, intensity (16 bytes a point),
+    in the byte order given (sensor_msgs_py, which builds clouds in rclpy, has no PyPI wheel)."""
+    order = ">" if big_endian else "<"
+    msg = PointCloud2()
+    msg.header = Header(stamp=Time(sec=7, nanosec=250_000_000), frame_id="lidar")
+    msg.height, msg.width = 1, len(CLOUD_POINTS)
+    msg.fields = [
+        PointField(name=name, offset=4 * i, datatype=PointField.FLOAT32, count=1)
+        for i, name in enumerate(("x", "y", "z", "intensity"))
+    ]
+    msg.is_bigendian = big_endian
+    msg.point_step, msg.row_step = 16, 16 * len(CLOUD_POINTS)
+    msg.data = b"".join(struct.pack(order + "4f", *p) for p in CLOUD_POINTS)
+    msg.is_dense = False
+    return msg
+
+
+def point_cloud2() -> PointCloud2:
+    return point_cloud(big_endian=False)
+
+
+def point_cloud2_big_endian() -> PointCloud2:
+    return point_cloud(big_endian=True)
+
+
 def pose_stamped() -> PoseStamped:
     msg = PoseStamped()
     msg.header = Header(stamp=Time(sec=7, nanosec=1), frame_id="map")
@@ -353,6 +387,8 @@ FIXTURES = {
     "pose_stamped": pose_stamped,
     "diagnostic_array": diagnostic_array,
     "marker_array": marker_array,
+    "point_cloud2": point_cloud2,
+    "point_cloud2_big_endian": point_cloud2_big_endian,
 }
 
 

@@ -28,10 +28,14 @@ use std::path::Path;
 use std::time::Instant;
 
 use byteorder::LittleEndian;
-use cstep::ros::convert::{goal_position, laser_scan_to_scan, odometry_to_state};
-use cstep::ros::messages::{
-    EvaluateBatchRequest, EvaluateRequest, LaserScan, Odometry, PoseStamped,
+use cstep::cloud::{CloudInput, CloudOptions};
+use cstep::ros::convert::{
+    goal_position, laser_scan_to_scan, odometry_to_state, point_cloud_to_scan,
 };
+use cstep::ros::messages::{
+    EvaluateBatchRequest, EvaluateRequest, LaserScan, Odometry, PointCloud2, PoseStamped,
+};
+use nalgebra::UnitQuaternion;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use ros2_client::builtin_interfaces;
@@ -135,6 +139,17 @@ fn targets() -> Vec<Target> {
             seeds: vec![fixture("laser_scan"), fixture("laser_scan_empty")],
         },
         Target {
+            name: "cloud sensor_msgs/PointCloud2",
+            // Read as the node reads a cloud (a small bound on points, so that a huge width
+            // and height cost a stride, not time), tilted so the rotation is not trivial.
+            run: |b| {
+                topic::<PointCloud2>(b)
+                    .map(|m| drop(point_cloud_to_scan(&m, &tilted(), &cloud_input())))
+                    .is_some()
+            },
+            seeds: vec![fixture("point_cloud2"), fixture("point_cloud2_big_endian")],
+        },
+        Target {
             name: "goal_pose geometry_msgs/PoseStamped",
             run: |b| {
                 topic::<PoseStamped>(b)
@@ -202,6 +217,24 @@ fn targets() -> Vec<Target> {
             seeds: vec![encoded(&participant)],
         },
     ]
+}
+
+/// A robot rolled and pitched by 0.2 rad and turned by 1 rad.
+fn tilted() -> UnitQuaternion<f64> {
+    UnitQuaternion::from_euler_angles(0.2, -0.2, 1.0)
+}
+
+/// The node's cloud reading with its default band and ranges and at most 4096 points.
+fn cloud_input() -> CloudInput {
+    CloudInput {
+        options: CloudOptions {
+            band: (-0.2, 0.2),
+            range_min: 0.1,
+            range_max: 10.0,
+            field_of_view: 3.0,
+        },
+        max_points: 4096,
+    }
 }
 
 /// `value` as a CDR_LE payload, for the types with no rclpy fixture.

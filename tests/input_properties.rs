@@ -13,6 +13,7 @@ use std::sync::OnceLock;
 
 use cstep::estimator::Estimator;
 use cstep::input::{InputError, MAX_ANGULAR_RATE, MAX_BEAMS, MAX_COORDINATE, MAX_SPEED};
+use cstep::occupancy::ScanFrame;
 use cstep::parameters::{Settings, DEFAULT_NODE_NAME};
 use cstep::ros::convert::{
     empowerment_message, goal_position, laser_scan_to_scan, odometry_to_state, reward_message,
@@ -287,7 +288,8 @@ fn check_scored(
         Err(e) => return check_error(&e),
     };
     let (estimator, c) = &estimators()[which];
-    let Score { estimate, reward } = score(estimator, &state, &parsed, goal.as_ref(), *c, false);
+    let seen = (&parsed, ScanFrame::Body);
+    let Score { estimate, reward } = score(estimator, &state, seen, goal.as_ref(), *c, false);
     let e = empowerment_message(Header::default(), &estimate, *c);
     let r = reward_message(Header::default(), &reward, *c, estimate.valid());
     for (name, v) in [

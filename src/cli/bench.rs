@@ -8,6 +8,7 @@ use std::time::{Duration, Instant};
 use serde::Serialize;
 
 use cstep::estimator::Estimator;
+use cstep::occupancy::ScanFrame;
 use cstep::parameters::{Settings, BUILTIN_HUSKY_PATH};
 
 use super::{CliError, Format};
@@ -134,7 +135,7 @@ fn measure(estimator: &Estimator, model: &str, args: &BenchArgs) -> Row {
             seed = seed.wrapping_add(1);
         }
         let started = Instant::now();
-        std::hint::black_box(estimator.evaluate_with_seed(&state, &scan, seed));
+        std::hint::black_box(estimator.evaluate_with_seed(&state, &scan, ScanFrame::Body, seed));
         started.elapsed()
     };
     for _ in 0..5 {

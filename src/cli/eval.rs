@@ -8,6 +8,7 @@ use serde::Serialize;
 
 use cstep::estimator::Estimator;
 use cstep::excerpt::excerpt;
+use cstep::occupancy::ScanFrame;
 use cstep::parameters::{Settings, DEFAULT_NODE_NAME};
 use cstep::ros::convert::{
     empowerment_message, goal_position, laser_scan_to_scan, odometry_to_state, InputError,
@@ -115,7 +116,7 @@ pub fn run(args: EvalArgs) -> Result<(), CliError> {
     let Score { estimate, reward } = score(
         &estimator,
         &state,
-        &scan,
+        (&scan, ScanFrame::Body),
         goal.as_ref(),
         settings.safety_coefficient,
         false,

@@ -4,9 +4,13 @@
 //! nanoseconds). Fields cstep does not read (covariances, `child_frame_id`, `intensities`,
 //! `time_increment`, `scan_time`, a goal's orientation) are not checked.
 
-use nalgebra::Vector3;
+use nalgebra::{UnitQuaternion, Vector3};
 
-use super::messages::{EmpoweredReward, Empowerment, Header, LaserScan, Odometry, Point, Time};
+use super::messages::point_cloud::cloud_points;
+use super::messages::{
+    EmpoweredReward, Empowerment, Header, LaserScan, Odometry, Point, PointCloud2, Time,
+};
+use crate::cloud::{CloudInput, CloudScan};
 use crate::estimator::Estimate;
 pub use crate::input::InputError;
 use crate::input::{self, ScanGeometry};
@@ -59,6 +63,21 @@ pub fn laser_scan_to_scan(msg: &LaserScan) -> Result<Scan, InputError> {
         range_max: msg.range_max,
     };
     input::scan(&geometry, &msg.ranges)
+}
+
+/// The scan a `PointCloud2` becomes for a robot at `attitude` (body → world), its points read
+/// as `input` says ([`CloudScan::from_points`]); the cloud is in the body frame with the sensor
+/// at its origin, as a scan is. A cloud whose layout cannot be read is an error of the field
+/// `point cloud`.
+pub fn point_cloud_to_scan(
+    msg: &PointCloud2,
+    attitude: &UnitQuaternion<f64>,
+    input: &CloudInput,
+) -> Result<CloudScan, InputError> {
+    stamp("header.stamp", msg.header.stamp)?;
+    let points = cloud_points(msg, input.max_points)
+        .map_err(|e| InputError::new("point cloud", e.to_string()))?;
+    Ok(CloudScan::from_points(points, attitude, &input.options))
 }
 
 /// The `LaserScan` message for a scan (the inverse of [`laser_scan_to_scan`]).

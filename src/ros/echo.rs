@@ -23,7 +23,7 @@ use serde::Serialize;
 use super::messages::yaml::{self, to_yaml};
 use super::messages::{
     ros_type_of_dds, DiagnosticArray, EmpoweredReward, Empowerment, LaserScan, MarkerArray,
-    Odometry, PoseStamped, RosMessage,
+    Odometry, PointCloud2, PoseStamped, RosMessage, SpeedLimit,
 };
 use super::rcl::context::{context_from_env, resolve, ContextError};
 use crate::excerpt::excerpt;
@@ -201,11 +201,16 @@ pub enum EchoType {
     LaserScan,
     /// `geometry_msgs/msg/PoseStamped`.
     PoseStamped,
+    /// `sensor_msgs/msg/PointCloud2` (its `data` printed byte by byte, as `ros2 topic echo`
+    /// does).
+    PointCloud2,
+    /// `nav2_msgs/msg/SpeedLimit`.
+    SpeedLimit,
 }
 
 impl EchoType {
     /// Every type `cstep echo` can print.
-    pub const ALL: [EchoType; 7] = [
+    pub const ALL: [EchoType; 9] = [
         EchoType::Empowerment,
         EchoType::EmpoweredReward,
         EchoType::DiagnosticArray,
@@ -213,6 +218,8 @@ impl EchoType {
         EchoType::Odometry,
         EchoType::LaserScan,
         EchoType::PoseStamped,
+        EchoType::PointCloud2,
+        EchoType::SpeedLimit,
     ];
 
     /// Package and type name.
@@ -225,6 +232,8 @@ impl EchoType {
             EchoType::Odometry => parts::<Odometry>(),
             EchoType::LaserScan => parts::<LaserScan>(),
             EchoType::PoseStamped => parts::<PoseStamped>(),
+            EchoType::PointCloud2 => parts::<PointCloud2>(),
+            EchoType::SpeedLimit => parts::<SpeedLimit>(),
         }
     }
 
@@ -385,6 +394,8 @@ pub fn echo(options: &EchoOptions, out: &mut dyn Write) -> Result<(), EchoError>
         EchoType::Odometry => run.print::<Odometry>(&mut node, &dds_topic, qos, out),
         EchoType::LaserScan => run.print::<LaserScan>(&mut node, &dds_topic, qos, out),
         EchoType::PoseStamped => run.print::<PoseStamped>(&mut node, &dds_topic, qos, out),
+        EchoType::PointCloud2 => run.print::<PointCloud2>(&mut node, &dds_topic, qos, out),
+        EchoType::SpeedLimit => run.print::<SpeedLimit>(&mut node, &dds_topic, qos, out),
     }
 }
 

@@ -1,9 +1,9 @@
 """The live-node test rig, shared by the tests that drive `cstep node` (a pytest plugin).
 
-``conftest.py`` loads this module as a plugin, so its fixtures (``cstep_node``, ``rig``) are
-available to every test; its helpers (``Rig``, ``corridor_scan``, ``odometry``,
-``message_to_ordereddict``, and ``cstep_binary`` from :mod:`cstep_bridge.resources`) are imported
-from it.
+``conftest.py`` loads this module as a plugin, so its fixtures (``cstep_node``, ``rig``,
+``echo``) are available to every test; its helpers (``Rig``, ``Echo``, ``start_node``,
+``corridor_scan``, ``odometry``, ``message_to_ordereddict``, and ``cstep_binary`` from
+:mod:`cstep_bridge.resources`) are imported from it.
 """
 
 import json
@@ -15,6 +15,7 @@ import time
 from pathlib import Path
 
 import pytest
+import yaml
 from conftest import REPO, wait_until
 from corridor_inputs import corridor_scan, odometry
 from cstep_bridge.resources import config_file, cstep_binary
@@ -43,19 +44,27 @@ def message_to_ordereddict(message) -> dict:
     }
 
 
-@pytest.fixture
-def cstep_node(ros_domain):
-    """A live `cstep node` on this test's domain; interrupted, then killed, by its PID."""
-    log_path = Path(os.environ.get("TMPDIR", "/tmp")) / f"cstep-node-{ros_domain}.log"
-    with open(log_path, "w") as log:
-        proc = subprocess.Popen(
-            [str(cstep_binary()), "node", "--config", str(CONFIG)],
-            stdout=log,
+def start_node(*params: str) -> subprocess.Popen:
+    """`cstep node` on this test's domain (``ROS_DOMAIN_ID``) with ``-p`` for each of
+    ``params`` (``name:=value``); its log in TMPDIR, named by the domain."""
+    ros_args = ["--ros-args", *(arg for p in params for arg in ("-p", p))] if params else []
+    domain = os.environ.get("ROS_DOMAIN_ID", "0")
+    log = Path(os.environ.get("TMPDIR", "/tmp")) / f"cstep-node-{domain}.log"
+    with open(log, "w") as out:
+        return subprocess.Popen(
+            [str(cstep_binary()), "node", "--config", str(CONFIG), *ros_args],
+            stdout=out,
             stderr=subprocess.STDOUT,
             cwd=REPO,
         )
-        yield proc
-        stop_gently(proc)
+
+
+@pytest.fixture
+def cstep_node(ros_domain):
+    """A live `cstep node` on this test's domain; interrupted, then killed, by its PID."""
+    proc = start_node()
+    yield proc
+    stop_gently(proc)
 
 
 def stop_gently(proc: subprocess.Popen) -> None:
@@ -187,3 +196,55 @@ def rig(cstep_node, ros_context, executor):
     r.warm_up()
     yield r
     r.node.destroy_node()
+
+
+class Echo:
+    """A `cstep echo` process this test started; killed by its PID if still running."""
+
+    def __init__(self, *args: str, env: dict[str, str] | None = None) -> None:
+        self.proc = subprocess.Popen(
+            [str(cstep_binary()), "echo", *args],
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+            cwd=REPO,
+            env=env,
+        )
+        self.stdout = ""
+        self.stderr = ""
+
+    def running(self) -> bool:
+        return self.proc.poll() is None
+
+    def finish(self, timeout: float = 10.0) -> int:
+        try:
+            self.stdout, self.stderr = self.proc.communicate(timeout=timeout)
+        except subprocess.TimeoutExpired:
+            self.kill()
+            pytest.fail(f"cstep echo did not exit within {timeout:.0f} s")
+        return self.proc.returncode
+
+    def kill(self) -> None:
+        if self.proc.poll() is None:
+            self.proc.kill()  # by PID: this very process
+        self.stdout, self.stderr = self.proc.communicate(timeout=10)
+
+    def documents(self) -> list:
+        """The YAML documents printed (the stream ends with `---`, an empty last document)."""
+        return [d for d in yaml.safe_load_all(self.stdout) if d is not None]
+
+
+@pytest.fixture
+def echo():
+    """Start `cstep echo` processes; every one still running is killed when the test ends."""
+    started: list[Echo] = []
+
+    def start(*args: str, **kwargs) -> Echo:
+        e = Echo(*args, **kwargs)
+        started.append(e)
+        return e
+
+    yield start
+    for e in started:
+        if e.running():
+            e.kill()

@@ -4,65 +4,10 @@ a private domain per test)."""
 import math
 import os
 import struct
-import subprocess
 import time
 
-import pytest
-import yaml
-from conftest import DISCOVERY_TIMEOUT_S, REPO
-from node_rig import corridor_scan, cstep_binary, message_to_ordereddict, odometry
-
-
-class Echo:
-    """A `cstep echo` process this test started; killed by its PID if still running."""
-
-    def __init__(self, *args: str, env: dict[str, str] | None = None) -> None:
-        self.proc = subprocess.Popen(
-            [str(cstep_binary()), "echo", *args],
-            stdout=subprocess.PIPE,
-            stderr=subprocess.PIPE,
-            text=True,
-            cwd=REPO,
-            env=env,
-        )
-        self.stdout = ""
-        self.stderr = ""
-
-    def running(self) -> bool:
-        return self.proc.poll() is None
-
-    def finish(self, timeout: float = 10.0) -> int:
-        try:
-            self.stdout, self.stderr = self.proc.communicate(timeout=timeout)
-        except subprocess.TimeoutExpired:
-            self.kill()
-            pytest.fail(f"cstep echo did not exit within {timeout:.0f} s")
-        return self.proc.returncode
-
-    def kill(self) -> None:
-        if self.proc.poll() is None:
-            self.proc.kill()  # by PID: this very process
-        self.stdout, self.stderr = self.proc.communicate(timeout=10)
-
-    def documents(self) -> list:
-        """The YAML documents printed (the stream ends with `---`, an empty last document)."""
-        return [d for d in yaml.safe_load_all(self.stdout) if d is not None]
-
-
-@pytest.fixture
-def echo():
-    """Start `cstep echo` processes; every one still running is killed when the test ends."""
-    started: list[Echo] = []
-
-    def start(*args: str, **kwargs) -> Echo:
-        e = Echo(*args, **kwargs)
-        started.append(e)
-        return e
-
-    yield start
-    for e in started:
-        if e.running():
-            e.kill()
+from conftest import DISCOVERY_TIMEOUT_S
+from node_rig import Echo, corridor_scan, message_to_ordereddict, odometry
 
 
 def feed_while_running(rig, process: Echo, first_sec: int) -> int:

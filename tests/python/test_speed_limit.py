@@ -10,15 +10,21 @@ prefix as ``CSTEP_TEST_INTERFACES`` (its libraries on ``LD_LIBRARY_PATH``).
 
 import os
 import signal
-import subprocess
 import sys
 from itertools import pairwise
 from pathlib import Path
 
 import pytest
-from conftest import REPO, wait_until
-from cstep_bridge.resources import cstep_binary
-from node_rig import CONFIG, Rig, corridor_scan, cstep_eval, odometry, stop_gently
+from conftest import wait_until
+from node_rig import (
+    Rig,
+    corridor_scan,
+    cstep_eval,
+    message_to_ordereddict,
+    odometry,
+    start_node,
+    stop_gently,
+)
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 
 
@@ -57,19 +63,6 @@ def percent(e: float, full_speed_at: float, span: float, floor: float = FLOOR) -
     """The declared mapping (crates/cstep-core/src/speed_limit.rs), operation for operation."""
     t = min(max((e - (full_speed_at - span)) / span, 0.0), 1.0)
     return min(max(floor + (100.0 - floor) * t, floor), 100.0)
-
-
-def start_node(*params: str) -> subprocess.Popen:
-    """`cstep node` with ``-p`` for each of ``params`` (``name:=value``); its log in TMPDIR."""
-    ros_args = [arg for p in params for arg in ("-p", p)]
-    log = Path(os.environ.get("TMPDIR", "/tmp")) / f"cstep-speed-limit-{os.getpid()}.log"
-    with open(log, "w") as out:
-        return subprocess.Popen(
-            [str(cstep_binary()), "node", "--config", str(CONFIG), "--ros-args", *ros_args],
-            stdout=out,
-            stderr=subprocess.STDOUT,
-            cwd=REPO,
-        )
 
 
 class Nav2Rig(Rig):
@@ -176,6 +169,20 @@ def test_speed_limit_is_what_the_mapping_says_for_known_scans(tmp_path, ros_cont
         assert {sent[stamp_ns(m)] for m in rig.limits} == set(WIDTHS)
     finally:
         stop_gently(proc)
+
+
+def test_echo_prints_the_limit_the_controller_server_receives(nav2, echo):
+    """`cstep echo` knows nav2_msgs/SpeedLimit: found from the node's publisher, printed as
+    the Nav2-typed subscriber received it."""
+    nav2.limits.clear()
+    e = echo("/speed_limit", "--once", "--timeout", "20")
+    nav2.feed_until(lambda: not e.running(), "cstep echo to exit", first_sec=7000, timeout=30)
+    assert e.finish() == 0, e.stderr
+    nav2.spin_for(0.3)
+    [document] = e.documents()
+    received = {stamp_ns(m): m for m in nav2.limits}
+    stamp = document["header"]["stamp"]
+    assert document == message_to_ordereddict(received[stamp["sec"] * 10**9 + stamp["nanosec"]])
 
 
 @pytest.mark.parametrize("speed_limit_node", [("speed_limit_max_speed:=0.8",)], indirect=True)

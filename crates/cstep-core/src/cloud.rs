@@ -8,8 +8,8 @@
 //! reads it: a LiDAR drops the points of beams that returned nothing); a bin outside the field
 //! of view reads as invalid, so `unknown_space` decides it as it decides a scan's unseen
 //! bearings. Binning by the world-aligned bearing after the attitude's full rotation keeps a
-//! tilted sensor's points where they are; the scan it gives is therefore read with the identity
-//! attitude ([`CloudScan::attitude`]).
+//! tilted sensor's points where they are; the scan it gives is therefore read in
+//! [`crate::occupancy::ScanFrame::WorldAligned`].
 
 use std::f64::consts::PI;
 
@@ -36,6 +36,16 @@ pub struct CloudOptions {
     pub field_of_view: f64,
 }
 
+/// How a node reads its point clouds: which points count, and the most it reads of one cloud
+/// (a larger one is thinned evenly), which bounds the work a cloud costs.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CloudInput {
+    /// Which points count.
+    pub options: CloudOptions,
+    /// The most points read of one cloud.
+    pub max_points: usize,
+}
+
 /// What a cloud held, for diagnostics.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct CloudSummary {
@@ -54,7 +64,8 @@ pub struct CloudSummary {
 /// The scan a cloud becomes, and what the cloud held.
 #[derive(Debug, Clone, PartialEq)]
 pub struct CloudScan {
-    /// The scan, in the world-aligned frame centred on the robot.
+    /// The scan, in the world-aligned frame centred on the robot
+    /// ([`crate::occupancy::ScanFrame::WorldAligned`]).
     pub scan: Scan,
     /// The cloud's counts.
     pub summary: CloudSummary,
@@ -116,12 +127,6 @@ impl CloudScan {
             summary,
         }
     }
-
-    /// The attitude to read [`CloudScan::scan`] with: the identity, its bearings being in the
-    /// world-aligned frame already.
-    pub fn attitude() -> UnitQuaternion<f64> {
-        UnitQuaternion::identity()
-    }
 }
 
 /// The bin of bearing `bearing` (radians in [−π, π]) for bins of `increment` from −π.
@@ -132,7 +137,7 @@ fn bin_of(bearing: f64, increment: f64) -> usize {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::occupancy::{Beam, Occupancy, OccupancyOptions, UnknownSpace};
+    use crate::occupancy::{Beam, Occupancy, OccupancyOptions, ScanFrame, UnknownSpace};
 
     fn options() -> CloudOptions {
         CloudOptions {
@@ -275,7 +280,12 @@ mod tests {
             ceiling: None,
         };
         let level = UnitQuaternion::identity();
-        let from_cloud = Occupancy::build(&cloud.scan, &CloudScan::attitude(), 0.0, &occupancy);
+        let from_cloud = Occupancy::build(
+            &cloud.scan,
+            &ScanFrame::WorldAligned.read_with(&level),
+            0.0,
+            &occupancy,
+        );
         let from_scan = Occupancy::build(&scan, &level, 0.0, &occupancy);
         for (x, y) in [
             (1.2, 0.0),

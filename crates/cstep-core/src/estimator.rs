@@ -12,7 +12,7 @@ use crate::model::quadrotor::Quadrotor;
 use crate::model::urdf::{RobotDescription, UrdfError};
 use crate::model::wheeled::WheeledDescription;
 use crate::model::{CommandAxes, Dynamics};
-use crate::occupancy::{Occupancy, OccupancyOptions, Scan};
+use crate::occupancy::{Occupancy, OccupancyOptions, Scan, ScanFrame};
 use crate::parameters::{ModelKind, RobotSource, Settings, BUILTIN_ROBOTS};
 use crate::rollout::{roll_out, Rollout};
 use crate::sampling::{sample, Controls, SamplerKind};
@@ -245,17 +245,31 @@ impl Estimator {
         &self.settings
     }
 
-    /// C-STEP of `state` given `scan`, with the configured seed.
+    /// C-STEP of `state` given `scan` from a LiDAR fixed to the body, with the configured
+    /// seed.
     pub fn evaluate(&self, state: &RobotState, scan: &Scan) -> Estimate {
-        self.evaluate_with_seed(state, scan, self.settings.seed)
+        self.evaluate_in(state, scan, ScanFrame::Body)
     }
 
-    /// C-STEP of `state` given `scan`, with the control sample of `seed`.
-    pub fn evaluate_with_seed(&self, state: &RobotState, scan: &Scan, seed: u64) -> Estimate {
+    /// C-STEP of `state` given `scan` with bearings in `frame`, with the configured seed.
+    pub fn evaluate_in(&self, state: &RobotState, scan: &Scan, frame: ScanFrame) -> Estimate {
+        self.evaluate_with_seed(state, scan, frame, self.settings.seed)
+    }
+
+    /// C-STEP of `state` given `scan` with bearings in `frame`, with the control sample of
+    /// `seed`.
+    pub fn evaluate_with_seed(
+        &self,
+        state: &RobotState,
+        scan: &Scan,
+        frame: ScanFrame,
+        seed: u64,
+    ) -> Estimate {
         let started = Instant::now();
         let s = &self.settings;
         let mut estimate = self.floor(Status::Ok);
-        let occupancy = Occupancy::build(scan, &state.attitude, state.position.z, &s.occupancy);
+        let attitude = frame.read_with(&state.attitude);
+        let occupancy = Occupancy::build(scan, &attitude, state.position.z, &s.occupancy);
         let summary = occupancy.summary();
         estimate.status = if scan.ranges.is_empty() {
             Status::EmptyScan

@@ -32,6 +32,28 @@ pub struct Scan {
     pub ranges: Vec<f32>,
 }
 
+/// The frame a scan's bearings are read in, which decides the attitude its beams are turned by.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ScanFrame {
+    /// A LiDAR fixed to the body (every `sensor_msgs/LaserScan`): the beams turn and tilt
+    /// with the robot's attitude.
+    Body,
+    /// Bearings already world-aligned and horizontal, as a point cloud becomes a scan
+    /// ([`crate::cloud`]): read with the identity attitude.
+    WorldAligned,
+}
+
+impl ScanFrame {
+    /// The attitude (body → world) to read a scan in this frame with, for a robot at
+    /// `attitude`.
+    pub fn read_with(self, attitude: &UnitQuaternion<f64>) -> UnitQuaternion<f64> {
+        match self {
+            ScanFrame::Body => *attitude,
+            ScanFrame::WorldAligned => UnitQuaternion::identity(),
+        }
+    }
+}
+
 /// What a scan says about one beam.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Beam {

@@ -11,7 +11,7 @@ use nalgebra::Vector3;
 
 use crate::estimator::{Estimate, Estimator};
 use crate::input::InputError;
-use crate::occupancy::Scan;
+use crate::occupancy::{Scan, ScanFrame};
 use crate::reward::{empowered_reward, floor_reward, task_reward, Reward};
 use crate::state::RobotState;
 
@@ -24,14 +24,14 @@ pub struct Score {
     pub reward: Reward,
 }
 
-/// Scores `state` seen through `scan` with `estimator` (its configured seed) and safety
-/// coefficient `c`; the task reward decays with the distance to `goal`, or is 1 without one.
-/// A state its caller reports `in_collision` (a simulator that saw contact) scores the floor
-/// without reading the scan or rolling out ([`Estimator::known_collision`]).
+/// Scores `state` seen through `scan` (bearings in `frame`) with `estimator` (its configured
+/// seed) and safety coefficient `c`; the task reward decays with the distance to `goal`, or is
+/// 1 without one. A state its caller reports `in_collision` (a simulator that saw contact)
+/// scores the floor without reading the scan or rolling out ([`Estimator::known_collision`]).
 pub fn score(
     estimator: &Estimator,
     state: &RobotState,
-    scan: &Scan,
+    (scan, frame): (&Scan, ScanFrame),
     goal: Option<&Vector3<f64>>,
     c: f64,
     in_collision: bool,
@@ -39,7 +39,7 @@ pub fn score(
     let estimate = if in_collision {
         estimator.known_collision()
     } else {
-        estimator.evaluate(state, scan)
+        estimator.evaluate_in(state, scan, frame)
     };
     let reward = empowered_reward(estimate.empowerment, c, task_reward(&state.position, goal));
     Score { estimate, reward }
@@ -92,7 +92,8 @@ mod tests {
             assert_eq!(bad.estimate.empowerment, EMPOWERMENT_FLOOR);
             assert_eq!(bad.estimate.num_colliding, 0, "nothing was rolled out");
             for goal in [None, Some(Vector3::new(4.0, 6.0, 1.0))] {
-                let hit = score(&estimator, &state, &scan, goal.as_ref(), c, true);
+                let seen = (&scan, ScanFrame::Body);
+                let hit = score(&estimator, &state, seen, goal.as_ref(), c, true);
                 assert_eq!(hit.estimate, estimator.known_collision());
                 assert!(
                     bad.reward.reward <= hit.reward.reward,

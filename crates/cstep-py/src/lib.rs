@@ -15,6 +15,7 @@ use std::path::{Path, PathBuf};
 use cstep_core::estimator::Estimator;
 use cstep_core::input::{self, ScanGeometry};
 use cstep_core::model::urdf::RobotDescription;
+use cstep_core::occupancy::ScanFrame;
 use cstep_core::parameters::{self, is_urdf_text, ParameterSet, DEFAULT_NODE_NAME};
 use cstep_core::scoring::{admit, score, unscorable, Score};
 use numpy::ndarray::{Dimension, Ix1, Ix2};
@@ -185,7 +186,7 @@ impl Scorer {
                             let scored = score(
                                 &self.estimator,
                                 &state,
-                                &scan,
+                                (&scan, ScanFrame::Body),
                                 goal.as_ref(),
                                 c,
                                 in_collision[i],

@@ -83,6 +83,18 @@ pub(super) fn report(shared: &Shared, status: &StatusIdentity, stamp: Time) -> D
         ("requests_refused", latest.requests_refused.to_string()),
         ("replies_failed", latest.replies_failed.to_string()),
     ];
+    // The newest cloud's counts, once clouds are scored: where a band or range drops too much.
+    let cloud = latest.last_cloud.map(|c| {
+        [
+            ("cloud_points", c.points),
+            ("cloud_points_used", c.used),
+            ("cloud_points_outside_band", c.outside_band),
+            ("cloud_points_out_of_range", c.out_of_range),
+            ("cloud_points_not_finite", c.not_finite),
+        ]
+        .map(|(key, n)| (key, n.to_string()))
+    });
+    let values = values.into_iter().chain(cloud.into_iter().flatten());
     DiagnosticArray {
         header: Header {
             stamp,
@@ -94,7 +106,6 @@ pub(super) fn report(shared: &Shared, status: &StatusIdentity, stamp: Time) -> D
             message,
             hardware_id: status.hardware_id.clone(),
             values: values
-                .into_iter()
                 .map(|(key, value)| KeyValue {
                     key: key.into(),
                     value,

@@ -124,7 +124,7 @@ pub fn run(config: &[PathBuf], ros_args: &RosArgs, stop: Arc<AtomicBool>) -> Res
         node.fully_qualified_name(),
         context.domain_id(),
         names.odom,
-        names.scan,
+        names.cloud.as_ref().map_or(&names.scan, |(name, _)| name),
         names.empowerment,
         names.reward,
         names.markers,

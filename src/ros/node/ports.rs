@@ -11,11 +11,12 @@ use ros2_client::{
 };
 
 use super::NodeError;
+use crate::cloud::CloudInput;
 use crate::parameters::NodeSettings;
 use crate::ros::messages::{
     Clock, DiagnosticArray, EmpoweredReward, Empowerment, Evaluate, EvaluateBatch,
     EvaluateBatchRequest, EvaluateBatchResponse, EvaluateRequest, EvaluateResponse, LaserScan,
-    MarkerArray, Odometry, PoseStamped, RosMessage, RosService, SpeedLimit,
+    MarkerArray, Odometry, PointCloud2, PoseStamped, RosMessage, RosService, SpeedLimit,
 };
 use crate::ros::rcl::args::{NameKind, RosArgs};
 use crate::speed_limit::SpeedLimitOutput;
@@ -25,7 +26,10 @@ use super::speed_limit::SpeedLimiter;
 /// The node's topic and service names, fully qualified after namespace and remapping.
 pub(super) struct Names {
     pub(super) odom: String,
+    /// The scan input's name (unused while point clouds are read instead).
     pub(super) scan: String,
+    /// The point-cloud input's name and how its clouds are read, when `use_point_cloud` is on.
+    pub(super) cloud: Option<(String, CloudInput)>,
     pub(super) goal: String,
     pub(super) empowerment: String,
     pub(super) reward: String,
@@ -56,6 +60,10 @@ impl Names {
         let names = Self {
             odom: topic(&interface.odom_topic)?,
             scan: topic(&interface.scan_topic)?,
+            cloud: match &interface.cloud {
+                Some(input) => Some((topic(&interface.cloud_topic)?, input.clone())),
+                None => None,
+            },
             goal: topic(&interface.goal_topic)?,
             empowerment: topic(&interface.empowerment_topic)?,
             reward: topic(&interface.reward_topic)?,
@@ -93,7 +101,10 @@ impl Names {
                 "diagnostics",
             )),
             Some(Port::input::<Odometry>(&self.odom, "odometry")),
-            Some(Port::input::<LaserScan>(&self.scan, "scan")),
+            Some(match &self.cloud {
+                Some((name, _)) => Port::input::<PointCloud2>(name, "point cloud"),
+                None => Port::input::<LaserScan>(&self.scan, "scan"),
+            }),
             Some(Port::input::<PoseStamped>(&self.goal, "goal")),
             Some(Port::input::<Clock>(&self.clock, "clock")),
         ]
@@ -156,10 +167,16 @@ impl<'a> Port<'a> {
     }
 }
 
+/// The node's sensor input: scans, or point clouds (`use_point_cloud`) and how to read them.
+pub(super) enum SensorInput {
+    Scans(ros2_client::Subscription<LaserScan>),
+    Clouds(ros2_client::Subscription<PointCloud2>, CloudInput),
+}
+
 /// The node's topics and services.
 pub(super) struct Ports {
     pub(super) odom: ros2_client::Subscription<Odometry>,
-    pub(super) scan: ros2_client::Subscription<LaserScan>,
+    pub(super) sensor: SensorInput,
     pub(super) goal: ros2_client::Subscription<PoseStamped>,
     pub(super) clock: ros2_client::Subscription<Clock>,
     pub(super) empowerment: Arc<Publisher<Empowerment>>,
@@ -190,7 +207,6 @@ impl Ports {
         // (`super::queue`), so the reader holds only those not yet taken.
         let service_qos = reliable.clone().history(History::KeepAll);
         let odom_topic = topic::<Odometry>(node, &names.odom, &sensor)?;
-        let scan_topic = topic::<LaserScan>(node, &names.scan, &sensor)?;
         let goal_topic = topic::<PoseStamped>(node, &names.goal, &reliable)?;
         let clock_topic = topic::<Clock>(node, &names.clock, &sensor)?;
         let empowerment_topic = topic::<Empowerment>(node, &names.empowerment, &reliable)?;
@@ -214,9 +230,23 @@ impl Ports {
             odom: node
                 .create_subscription(&odom_topic, Some(sensor.clone()))
                 .map_err(failed("the odometry subscription"))?,
-            scan: node
-                .create_subscription(&scan_topic, Some(sensor.clone()))
-                .map_err(failed("the scan subscription"))?,
+            sensor: match &names.cloud {
+                Some((name, input)) => SensorInput::Clouds(
+                    node.create_subscription(
+                        &topic::<PointCloud2>(node, name, &sensor)?,
+                        Some(sensor.clone()),
+                    )
+                    .map_err(failed("the point cloud subscription"))?,
+                    input.clone(),
+                ),
+                None => SensorInput::Scans(
+                    node.create_subscription(
+                        &topic::<LaserScan>(node, &names.scan, &sensor)?,
+                        Some(sensor.clone()),
+                    )
+                    .map_err(failed("the scan subscription"))?,
+                ),
+            },
             clock: node
                 .create_subscription(&clock_topic, Some(sensor.clone()))
                 .map_err(failed("the /clock subscription"))?,

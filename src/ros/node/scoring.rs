@@ -5,19 +5,23 @@ use std::sync::atomic::Ordering;
 use std::sync::Arc;
 use std::time::Duration;
 
+use nalgebra::UnitQuaternion;
 use ros2_client::Publisher;
 use tracing::debug;
 
 use super::markers::rollout_markers;
-use super::shared::{PostedScan, Shared};
+use super::shared::{PostedScan, Reading, Shared};
 use super::speed_limit::SpeedLimiter;
 use super::stamps::Order;
+use crate::cloud::CloudInput;
+use crate::occupancy::ScanFrame;
 use crate::ros::convert::{
-    empowerment_message, goal_position, laser_scan_to_scan, odometry_to_state, reward_message,
+    empowerment_message, goal_position, laser_scan_to_scan, odometry_to_state, point_cloud_to_scan,
+    reward_message,
 };
 use crate::ros::messages::{
     EmpoweredReward, Empowerment, EvaluateBatchRequest, Header, LaserScan, MarkerArray, Odometry,
-    Point,
+    Point, PointCloud2, Time,
 };
 use crate::scoring::{admit, score, Score};
 
@@ -34,7 +38,10 @@ pub(super) struct Outputs {
 /// speed limit (if on) and the score, then the markers if someone subscribes to them.
 pub(super) fn score_scans(shared: &Shared, outputs: &Outputs) {
     loop {
-        let PostedScan { scan, with_markers } = {
+        let PostedScan {
+            reading,
+            with_markers,
+        } = {
             let mut mailbox = shared.mailbox.lock().unwrap_or_else(|e| e.into_inner());
             loop {
                 if shared.stopping.load(Ordering::SeqCst) {
@@ -59,7 +66,11 @@ pub(super) fn score_scans(shared: &Shared, outputs: &Outputs) {
             shared.note_problem(|l| l.stale += 1, "odometry is stale");
             continue;
         }
-        let stamp = scan.header.stamp;
+        let sensed = match &reading {
+            Reading::Scan(scan) => Sensed::Scan(scan),
+            Reading::Cloud(cloud, input) => Sensed::Cloud(cloud, input),
+        };
+        let stamp = sensed.stamp();
         let order = shared
             .latest()
             .order
@@ -74,7 +85,7 @@ pub(super) fn score_scans(shared: &Shared, outputs: &Outputs) {
         let goal = shared.latest().goal;
         let query = Query {
             odom: &odom,
-            scan: &scan,
+            sensed,
             goal: goal.as_ref(),
             in_collision: false,
         };
@@ -108,10 +119,11 @@ pub(super) fn score_scans(shared: &Shared, outputs: &Outputs) {
 }
 
 /// One state to score: a `/cstep/evaluate` request, one entry of a `/cstep/evaluate_batch`
-/// request, or a scan with the newest odometry and goal.
+/// request, or a scan (or point cloud) with the newest odometry and goal.
 pub(super) struct Query<'a> {
     pub(super) odom: &'a Odometry,
-    pub(super) scan: &'a LaserScan,
+    /// What the robot's sensor saw.
+    pub(super) sensed: Sensed<'a>,
     /// Goal of the task reward; None for a task reward of 1.
     pub(super) goal: Option<&'a Point>,
     /// The caller reports the robot in collision: scored at the floor without rolling out.
@@ -151,7 +163,7 @@ impl<'a> Query<'a> {
         Ok((0..k)
             .map(|i| Query {
                 odom: &request.odom[i],
-                scan: &request.scan[i],
+                sensed: Sensed::Scan(&request.scan[i]),
                 goal: (request.has_goal.get(i) == Some(&true)).then(|| &request.goal[i]),
                 in_collision: request.in_collision.get(i) == Some(&true),
             })
@@ -167,27 +179,40 @@ impl<'a> Query<'a> {
         c: f64,
         with_markers: bool,
     ) -> Result<(Empowerment, EmpoweredReward, Option<MarkerArray>), String> {
-        let (state, scan, goal) = admit(
-            odometry_to_state(self.odom),
-            laser_scan_to_scan(self.scan),
-            self.goal.map(goal_position).transpose(),
-        )?;
+        let state = odometry_to_state(self.odom);
+        let (scan, frame, cloud) = match self.sensed {
+            Sensed::Scan(scan) => (laser_scan_to_scan(scan), ScanFrame::Body, None),
+            Sensed::Cloud(cloud, input) => {
+                // Without a usable attitude the odometry's own error is reported (by `admit`).
+                let attitude = state
+                    .as_ref()
+                    .map_or_else(|_| UnitQuaternion::identity(), |s| s.attitude);
+                match point_cloud_to_scan(cloud, &attitude, input) {
+                    Ok(read) => (Ok(read.scan), ScanFrame::WorldAligned, Some(read.summary)),
+                    Err(e) => (Err(e), ScanFrame::WorldAligned, None),
+                }
+            }
+        };
+        let (state, scan, goal) = admit(state, scan, self.goal.map(goal_position).transpose())?;
         let Score { estimate, reward } = score(
             &shared.estimator,
             &state,
-            &scan,
+            (&scan, frame),
             goal.as_ref(),
             c,
             self.in_collision,
         );
         let header = Header {
-            stamp: self.scan.header.stamp,
+            stamp: self.sensed.stamp(),
             frame_id: self.odom.header.frame_id.clone(),
         };
         {
             let mut latest = shared.latest();
             latest.scored += 1;
             latest.last_score = Some((estimate.empowerment, estimate.valid(), estimate.elapsed));
+            if cloud.is_some() {
+                latest.last_cloud = cloud;
+            }
         }
         let markers = with_markers.then(|| {
             rollout_markers(
@@ -202,5 +227,30 @@ impl<'a> Query<'a> {
             reward_message(header, &reward, c, estimate.valid()),
             markers,
         ))
+    }
+}
+
+/// What a robot's sensor saw, for [`Query`]: a scan, or a point cloud with how to read it.
+#[derive(Clone, Copy)]
+pub(super) enum Sensed<'a> {
+    Scan(&'a LaserScan),
+    Cloud(&'a PointCloud2, &'a CloudInput),
+}
+
+impl Sensed<'_> {
+    /// The stamp of the reading.
+    pub(super) fn stamp(self) -> Time {
+        match self {
+            Sensed::Scan(scan) => scan.header.stamp,
+            Sensed::Cloud(cloud, _) => cloud.header.stamp,
+        }
+    }
+
+    /// The header of the reading, for an answer that cannot be scored.
+    pub(super) fn header(self) -> Header {
+        match self {
+            Sensed::Scan(scan) => scan.header.clone(),
+            Sensed::Cloud(cloud, _) => cloud.header.clone(),
+        }
     }
 }

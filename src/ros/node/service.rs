@@ -7,7 +7,7 @@ use rayon::prelude::*;
 use ros2_client::RmwRequestId;
 
 use super::queue::Full;
-use super::scoring::Query;
+use super::scoring::{Query, Sensed};
 use super::shared::Shared;
 use crate::ros::convert::{empowerment_message, reward_message};
 use crate::ros::messages::{
@@ -104,7 +104,7 @@ fn answer(shared: &Shared, query: &Query, c: f64) -> (Empowerment, EmpoweredRewa
         Ok((empowerment, reward, _)) => (empowerment, reward),
         Err(problem) => {
             shared.note_problem(|l| l.rejected += 1, &problem);
-            rejected(shared, query.scan.header.clone(), problem, c)
+            rejected(shared, query.sensed.header(), problem, c)
         }
     }
 }
@@ -133,7 +133,7 @@ fn rejected(
 fn evaluate(shared: &Shared, request: &EvaluateRequest) -> EvaluateResponse {
     let query = Query {
         odom: &request.odom,
-        scan: &request.scan,
+        sensed: Sensed::Scan(&request.scan),
         goal: request.has_goal.then_some(&request.goal),
         in_collision: false,
     };

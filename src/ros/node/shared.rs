@@ -13,8 +13,9 @@ use std::time::{Duration, Instant};
 use super::queue::{Limits, SharedQueue};
 use super::service::Job;
 use super::stamps::{Order, StampOrder};
+use crate::cloud::{CloudInput, CloudSummary};
 use crate::estimator::Estimator;
-use crate::ros::messages::{LaserScan, Odometry, Point, Time};
+use crate::ros::messages::{LaserScan, Odometry, Point, PointCloud2, Time};
 
 /// What the DDS side and the scoring thread share.
 pub(super) struct Shared {
@@ -33,11 +34,18 @@ pub(super) struct Shared {
     pub(super) requests: SharedQueue<ros2_client::Gid, Job>,
 }
 
-/// A scan waiting to be scored.
+/// A reading waiting to be scored.
 pub(super) struct PostedScan {
-    pub(super) scan: LaserScan,
-    /// Whether `/cstep/markers` had a matched subscriber when the scan arrived.
+    pub(super) reading: Reading,
+    /// Whether `/cstep/markers` had a matched subscriber when the reading arrived.
     pub(super) with_markers: bool,
+}
+
+/// What the node scores a state from: a scan, or a point cloud and how to read it as one
+/// (`use_point_cloud`).
+pub(super) enum Reading {
+    Scan(LaserScan),
+    Cloud(PointCloud2, CloudInput),
 }
 
 /// Newest inputs and running counts, for scoring and diagnostics.
@@ -47,6 +55,8 @@ pub(super) struct Latest {
     pub(super) goal: Option<Point>,
     pub(super) last_scan: Option<Instant>,
     pub(super) last_score: Option<(f64, bool, Duration)>,
+    /// What the newest point cloud scored held (with `use_point_cloud`).
+    pub(super) last_cloud: Option<CloudSummary>,
     pub(super) scored: u64,
     pub(super) skipped: u64,
     /// Scans that arrived while nobody subscribed to the scores, so were not scored.

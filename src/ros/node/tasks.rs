@@ -13,10 +13,10 @@ use tracing::warn;
 use super::clock::NodeClock;
 use super::diagnostics::{self, StatusIdentity};
 use super::guard::Guard;
-use super::ports::Ports;
+use super::ports::{Ports, SensorInput};
 use super::rivals::{self, Verdict};
 use super::service::{Job, Reply};
-use super::shared::{PostedScan, Shared};
+use super::shared::{PostedScan, Reading, Shared};
 use crate::ros::convert::goal_position;
 
 /// How long an answer waits for its client's response reader to be matched before it is
@@ -64,11 +64,9 @@ pub(super) async fn serve(
             Err(e) => shared.undecodable("goal_pose", "message", &e),
         }
     });
-    let scans = ports.scan.async_stream().for_each(|received| async move {
-        let scan = match received {
-            Ok((scan, _)) => scan,
-            Err(e) => return shared.undecodable("scan", "message", &e),
-        };
+    // Posts a reading for the scoring thread, replacing one not yet scored; a reading nobody
+    // wants a score of is counted and dropped.
+    let post = move |reading: Reading| {
         // Matched readers of our writers, as the spinner records DDS matching.
         let scores_wanted = ports.empowerment.get_subscription_count(node) > 0
             || ports.reward.get_subscription_count(node) > 0
@@ -84,11 +82,41 @@ pub(super) async fn serve(
         }
         let with_markers = ports.markers.get_subscription_count(node) > 0;
         let mut mailbox = shared.mailbox.lock().unwrap_or_else(|e| e.into_inner());
-        if mailbox.replace(PostedScan { scan, with_markers }).is_some() {
+        let posted = PostedScan {
+            reading,
+            with_markers,
+        };
+        if mailbox.replace(posted).is_some() {
             shared.latest().skipped += 1;
         }
         shared.arrived.notify_one();
-    });
+    };
+    let readings = async move {
+        match &ports.sensor {
+            SensorInput::Scans(scans) => {
+                scans
+                    .async_stream()
+                    .for_each(|received| async move {
+                        match received {
+                            Ok((scan, _)) => post(Reading::Scan(scan)),
+                            Err(e) => shared.undecodable("scan", "message", &e),
+                        }
+                    })
+                    .await
+            }
+            SensorInput::Clouds(clouds, input) => {
+                clouds
+                    .async_stream()
+                    .for_each(|received| async move {
+                        match received {
+                            Ok((cloud, _)) => post(Reading::Cloud(cloud, input.clone())),
+                            Err(e) => shared.undecodable("point cloud", "message", &e),
+                        }
+                    })
+                    .await
+            }
+        }
+    };
     let service = queue_requests(
         shared,
         &ports.evaluate,
@@ -161,7 +189,7 @@ pub(super) async fn serve(
         Box::pin(odometry) as std::pin::Pin<Box<dyn std::future::Future<Output = ()>>>,
         Box::pin(goals),
         Box::pin(clock_ticks),
-        Box::pin(scans),
+        Box::pin(readings),
         Box::pin(service),
         Box::pin(batch_service),
         Box::pin(answers),

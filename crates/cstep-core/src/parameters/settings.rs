@@ -7,6 +7,7 @@ use std::path::{Path, PathBuf};
 
 use super::config::{ConfigError, ParameterSet, Parameters, DEFAULT_NODE_NAME};
 use super::robot::{is_urdf_text, RobotSource, BUILTIN_ROBOTS};
+use crate::cloud::{CloudInput, CloudOptions};
 use crate::model::CommandAxes;
 use crate::occupancy::UnknownSpace;
 use crate::sampling::{Controls, SamplerKind, CONTROL_SAMPLE_BUDGET_BYTES};
@@ -206,8 +207,12 @@ fn within_budget(
 pub struct NodeSettings {
     /// `nav_msgs/Odometry` input.
     pub odom_topic: String,
-    /// `sensor_msgs/LaserScan` input (sensor-data QoS).
+    /// `sensor_msgs/LaserScan` input (sensor-data QoS), unless `use_point_cloud`.
     pub scan_topic: String,
+    /// `sensor_msgs/PointCloud2` input (sensor-data QoS), with `use_point_cloud`.
+    pub cloud_topic: String,
+    /// How clouds are read when `use_point_cloud` is on (and scans are not); `None`: scans.
+    pub cloud: Option<CloudInput>,
     /// Optional `geometry_msgs/PoseStamped` goal for the task reward.
     pub goal_topic: String,
     /// `cstep_msgs/Empowerment` output.
@@ -239,14 +244,32 @@ pub struct NodeSettings {
 }
 
 impl NodeSettings {
-    /// Reads this struct's parameters from the checked values.
-    pub fn from_parameters(p: &Parameters) -> Self {
+    /// Reads this struct's parameters from the checked values; fails only on the limits that
+    /// span parameters (a cloud's height band and range interval).
+    pub fn from_parameters(p: &Parameters) -> Result<Self, ConfigError> {
         // The table's ranges start at 1, so every checked count converts.
         let count = |n: i64| usize::try_from(n).unwrap_or(usize::MAX);
         let name = |key: &str| p.text(key).to_owned();
-        Self {
+        let cloud = if p.flag("use_point_cloud") {
+            let options = CloudOptions {
+                band: ordered(p, "cloud_min_height", "cloud_max_height")?,
+                range_min: p.required_double("cloud_range_min"),
+                range_max: p.required_double("cloud_range_max"),
+                field_of_view: p.required_double("cloud_field_of_view"),
+            };
+            ordered(p, "cloud_range_min", "cloud_range_max")?;
+            Some(CloudInput {
+                options,
+                max_points: count(p.integer("cloud_max_points")),
+            })
+        } else {
+            None
+        };
+        Ok(Self {
             odom_topic: name("odom_topic"),
             scan_topic: name("scan_topic"),
+            cloud_topic: name("cloud_topic"),
+            cloud,
             goal_topic: name("goal_topic"),
             empowerment_topic: name("empowerment_topic"),
             reward_topic: name("reward_topic"),
@@ -268,7 +291,20 @@ impl NodeSettings {
             input_timeout: p.required_double("input_timeout"),
             time_jump_tolerance: p.required_double("time_jump_tolerance"),
             use_sim_time: p.flag("use_sim_time"),
-        }
+        })
+    }
+}
+
+/// The values of `low` and `high`, refused unless `low` is below `high`.
+fn ordered(p: &Parameters, low: &str, high: &str) -> Result<(f64, f64), ConfigError> {
+    let (a, b) = (p.required_double(low), p.required_double(high));
+    if a < b {
+        Ok((a, b))
+    } else {
+        Err(ConfigError::new(
+            &p.source(high),
+            format!("'{high}' ({b}) must be above '{low}' ({a})"),
+        ))
     }
 }
 
@@ -297,7 +333,7 @@ pub fn load_all(
 pub fn validate(set: ParameterSet) -> Result<(Settings, NodeSettings, Parameters), ConfigError> {
     let parameters = set.check()?;
     let settings = Settings::from_parameters(&parameters)?;
-    let node = NodeSettings::from_parameters(&parameters);
+    let node = NodeSettings::from_parameters(&parameters)?;
     Ok((settings, node, parameters))
 }
 
@@ -352,6 +388,52 @@ mod tests {
         assert_eq!(s.volume_dims, VolumeDims::Two);
         assert_eq!(s.robot_description, RobotSource::Builtin(BUILTIN_URDF_PATH));
         assert_eq!(s.robot_radius, None);
+    }
+
+    #[test]
+    fn point_clouds_are_off_by_default_and_read_whole_when_on() {
+        let (_, node, _) = load_all(&[], DEFAULT_NODE_NAME, &[]).unwrap();
+        assert_eq!((node.cloud, node.cloud_topic.as_str()), (None, "cloud"));
+        let on = [
+            "use_point_cloud:=true",
+            "cloud_min_height:=0.05",
+            "cloud_max_height:=0.6",
+            "cloud_range_max:=8.0",
+            "cloud_field_of_view:=1.5",
+            "cloud_max_points:=1000",
+        ]
+        .map(String::from);
+        let (_, node, _) = load_all(&[], DEFAULT_NODE_NAME, &on).unwrap();
+        let options = CloudOptions {
+            band: (0.05, 0.6),
+            range_min: 0.1,
+            range_max: 8.0,
+            field_of_view: 1.5,
+        };
+        assert_eq!(
+            node.cloud,
+            Some(CloudInput {
+                options,
+                max_points: 1000
+            })
+        );
+        for (bad, says) in [
+            (
+                ["cloud_min_height:=0.3", "cloud_max_height:=0.3"],
+                "'cloud_max_height' (0.3) must be above 'cloud_min_height' (0.3)",
+            ),
+            (
+                ["cloud_range_min:=2", "cloud_range_max:=1"],
+                "'cloud_range_max' (1) must be above 'cloud_range_min' (2)",
+            ),
+        ] {
+            let mut assignments = vec!["use_point_cloud:=true".to_owned()];
+            assignments.extend(bad.map(String::from));
+            let error = load_all(&[], DEFAULT_NODE_NAME, &assignments)
+                .unwrap_err()
+                .to_string();
+            assert!(error.contains(says), "{error}");
+        }
     }
 
     #[test]

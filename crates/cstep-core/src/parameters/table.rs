@@ -352,6 +352,97 @@ pub const PARAMETERS: &[Parameter] = &[
         change: Change::ReadOnly,
     },
     Parameter {
+        name: "use_point_cloud",
+        rule: Rule::Bool,
+        default: "false",
+        unit: None,
+        description: "Score sensor_msgs/PointCloud2 from cloud_topic (a 3-D LiDAR, a depth \
+            camera) instead of scans from scan_topic. The points between cloud_min_height and \
+            cloud_max_height above the robot's origin (world-aligned, after the odometry's \
+            attitude), at horizontal ranges from cloud_range_min to cloud_range_max, become a \
+            720-bearing scan keeping each bearing's nearest point, as pointcloud_to_laserscan \
+            does; bearings within cloud_field_of_view without a point are free to \
+            cloud_range_max, the others unknown (unknown_space). The cloud is read in the \
+            body frame with the sensor at its origin, as scans are (no TF).",
+        change: Change::ReadOnly,
+    },
+    Parameter {
+        name: "cloud_topic",
+        rule: Rule::RosName,
+        default: "cloud",
+        unit: None,
+        description: "sensor_msgs/PointCloud2 input (with use_point_cloud; sensor-data QoS); \
+            one evaluation per cloud.",
+        change: Change::ReadOnly,
+    },
+    Parameter {
+        name: "cloud_min_height",
+        rule: Rule::Between {
+            min: f64::NEG_INFINITY,
+            max: f64::INFINITY,
+        },
+        default: "-0.2",
+        unit: Some("m"),
+        description: "Lowest point of a cloud that counts, above the robot's origin \
+            (world-aligned): set it above the ground a ground robot's sensor sees.",
+        change: Change::ReadOnly,
+    },
+    Parameter {
+        name: "cloud_max_height",
+        rule: Rule::Between {
+            min: f64::NEG_INFINITY,
+            max: f64::INFINITY,
+        },
+        default: "0.2",
+        unit: Some("m"),
+        description: "Highest point of a cloud that counts, above the robot's origin \
+            (world-aligned); above cloud_min_height.",
+        change: Change::ReadOnly,
+    },
+    Parameter {
+        name: "cloud_range_min",
+        rule: Rule::Between {
+            min: 0.0,
+            max: f64::INFINITY,
+        },
+        default: "0.1",
+        unit: Some("m"),
+        description: "Points of a cloud nearer than this horizontally are dropped (the robot's \
+            own body).",
+        change: Change::ReadOnly,
+    },
+    Parameter {
+        name: "cloud_range_max",
+        rule: Rule::Positive { optional: false },
+        default: "10.0",
+        unit: Some("m"),
+        description: "Points of a cloud farther than this horizontally are dropped; a bearing \
+            without a point is free up to it. Above cloud_range_min.",
+        change: Change::ReadOnly,
+    },
+    Parameter {
+        name: "cloud_field_of_view",
+        rule: Rule::Positive { optional: false },
+        default: "6.283185307179586",
+        unit: Some("rad"),
+        description: "The sensor's horizontal field of view, centred on the body's x axis: 2π \
+            (or more) for a spinning LiDAR, less for a camera.",
+        change: Change::ReadOnly,
+    },
+    Parameter {
+        name: "cloud_max_points",
+        rule: Rule::Integer {
+            min: 1,
+            max: 16_777_216,
+        },
+        default: "300000",
+        unit: None,
+        description: "The most points read of one cloud; a larger cloud is read every k-th \
+            point for the smallest k within it, which bounds the work a cloud costs (a \
+            128-ring LiDAR sends ~262 000).",
+        change: Change::ReadOnly,
+    },
+    Parameter {
         name: "goal_topic",
         rule: Rule::RosName,
         default: "goal_pose",

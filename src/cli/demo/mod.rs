@@ -1,5 +1,6 @@
-//! `cstep demo`: the node and a simulated drone flying the paper's arena, over real DDS on
-//! localhost, with a live table, a summary and an SVG plot.
+//! `cstep demo`: the node and a simulated robot — the Crazyflie flying the paper's arena, or
+//! the Husky driving a hall past pallets — over real DDS on localhost, with a live table, a
+//! summary and an SVG plot.
 
 use std::collections::HashMap;
 use std::path::PathBuf;
@@ -10,7 +11,10 @@ use nalgebra::UnitQuaternion;
 use ros2_client::qos::{Durability, History, WhenFull};
 use ros2_client::{MessageTypeName, Name, NodeName, NodeOptions, QosProfile};
 
+use cstep::demo::aisle::Aisle;
 use cstep::demo::arena::{Arena, Flight, PAPER_WORLD};
+use cstep::demo::scene::{Lidar, Scene};
+use cstep::parameters::BUILTIN_HUSKY_PATH;
 use cstep::ros::convert::scan_to_laser_scan;
 use cstep::ros::messages::{
     EmpoweredReward, Empowerment, Header, LaserScan, Odometry, PoseStamped, RosMessage, Time,
@@ -20,16 +24,21 @@ use cstep::ros::rcl::context::{context_from_env, ContextError};
 
 use super::node::stop_on_ctrl_c;
 use super::CliError;
-use plot::{flight_svg, FlightSample};
+use plot::{flight_svg, FlightSample, Map};
 
 mod plot;
 
 /// Arguments of `cstep demo`.
 #[derive(Debug, clap::Args)]
 pub struct DemoArgs {
-    /// Seconds to fly (the scripted flight takes about 6 s, then hovers at the goal).
-    #[arg(long, default_value_t = 8.0)]
-    duration: f64,
+    /// The robot: the Crazyflie in the paper's arena, or Clearpath's Husky (`model:
+    /// diff_drive`, its URDF as shipped) in a hall with pallets.
+    #[arg(long, value_enum, default_value_t = Robot::Crazyflie)]
+    robot: Robot,
+    /// Seconds to run [default: the scripted route and a second at its end: 8 for the
+    /// Crazyflie, 10 for the Husky].
+    #[arg(long)]
+    duration: Option<f64>,
     /// Where to write the SVG plot of empowerment along the flight.
     #[arg(long, default_value = "out/demo.svg")]
     plot: PathBuf,
@@ -92,11 +101,94 @@ pub enum DemoError {
 /// Scans per second the simulated LiDAR publishes.
 const SCAN_RATE_HZ: f64 = 10.0;
 
+/// The robots `cstep demo` can run.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, clap::ValueEnum)]
+enum Robot {
+    /// The Crazyflie (the built-in URDF), flying.
+    Crazyflie,
+    /// Clearpath's Husky (the built-in URDF, `model: diff_drive`), driving.
+    Husky,
+}
+
+/// A demo's world, route and robot.
+struct Course {
+    /// What the run is, for its first line.
+    title: &'static str,
+    /// What the plot draws.
+    map: Map,
+    /// What the LiDAR sees.
+    scene: Scene,
+    /// The scripted route.
+    route: Flight,
+    /// The robot's scanner.
+    lidar: Lidar,
+    /// Height of the robot's origin, metres.
+    altitude: f64,
+    /// Whether the robot turns to face where it goes (a ground robot), or stays level facing
+    /// +x (the drone, whose body frame is then the world's).
+    faces_travel: bool,
+    /// The node's parameters for this robot (`name:=value`).
+    parameters: Vec<String>,
+    /// Seconds to run unless `--duration` says.
+    duration: f64,
+}
+
+impl Course {
+    fn of(robot: Robot) -> Self {
+        match robot {
+            Robot::Crazyflie => {
+                let arena = Arena::paper(0.0);
+                Self {
+                    title: "Crazyflie in the paper's arena (block centred at y = 0)",
+                    map: Map {
+                        bounds: arena.bounds,
+                        obstacles: vec![arena.block],
+                    },
+                    scene: arena.scene,
+                    route: Flight::past_the_block(),
+                    lidar: PAPER_WORLD.lidar,
+                    altitude: arena.altitude,
+                    faces_travel: false,
+                    parameters: Vec::new(),
+                    duration: 8.0,
+                }
+            }
+            Robot::Husky => {
+                let aisle = Aisle::hall();
+                Self {
+                    title: "Husky (diff_drive) in a hall, through a door between pallets",
+                    map: Map {
+                        bounds: aisle.bounds,
+                        obstacles: aisle.pallets,
+                    },
+                    scene: aisle.scene,
+                    route: Aisle::drive(),
+                    lidar: Aisle::lidar(),
+                    altitude: 0.0,
+                    faces_travel: true,
+                    parameters: vec![
+                        "model:=diff_drive".into(),
+                        format!("robot_description:={BUILTIN_HUSKY_PATH}"),
+                    ],
+                    duration: 10.0,
+                }
+            }
+        }
+    }
+}
+
 /// Runs `cstep demo`.
 pub fn run(args: DemoArgs) -> Result<(), CliError> {
-    if !(args.duration.is_finite() && args.duration > 0.0) {
-        return Err(DemoError::Duration(args.duration).into());
+    let course = Course::of(args.robot);
+    let duration = args.duration.unwrap_or(course.duration);
+    if !(duration.is_finite() && duration > 0.0) {
+        return Err(DemoError::Duration(duration).into());
     }
+    let mut ros_args = vec!["--ros-args".to_owned()];
+    for parameter in &course.parameters {
+        ros_args.extend(["-p".to_owned(), parameter.clone()]);
+    }
+    let ros_args = RosArgs::parse(&ros_args)?;
     // Never leave the machine (no static peers, no deprecated override); a private domain
     // unless the user chose one.
     std::env::set_var("ROS_AUTOMATIC_DISCOVERY_RANGE", "LOCALHOST");
@@ -107,9 +199,8 @@ pub fn run(args: DemoArgs) -> Result<(), CliError> {
     }
     let stop = stop_on_ctrl_c()?;
     let node_stop = stop.clone();
-    let node =
-        std::thread::spawn(move || cstep::ros::node::run(&[], &RosArgs::default(), node_stop));
-    let flown = fly(&args, &stop);
+    let node = std::thread::spawn(move || cstep::ros::node::run(&[], &ros_args, node_stop));
+    let flown = fly(&course, duration, &stop);
     stop.store(true, Ordering::SeqCst);
     let node_result = node.join().map_err(|_| DemoError::NodeThread)?;
     let samples = flown?;
@@ -124,7 +215,7 @@ pub fn run(args: DemoArgs) -> Result<(), CliError> {
     std::fs::write(
         &args.plot,
         flight_svg(
-            &Arena::paper(0.0),
+            &course.map,
             &samples.iter().map(|s| s.sample).collect::<Vec<_>>(),
         ),
     )
@@ -146,8 +237,13 @@ struct Scored {
     valid: bool,
 }
 
-/// Flies the drone: publishes odometry and scans at 10 Hz and collects the node's answers.
-fn fly(args: &DemoArgs, stop: &std::sync::atomic::AtomicBool) -> Result<Vec<Scored>, DemoError> {
+/// Runs the robot along `course`'s route for `duration` seconds: publishes odometry and scans
+/// at 10 Hz and collects the node's answers.
+fn fly(
+    course: &Course,
+    duration: f64,
+    stop: &std::sync::atomic::AtomicBool,
+) -> Result<Vec<Scored>, DemoError> {
     let context = context_from_env(false)?;
     let mut node = context
         .new_node(
@@ -209,19 +305,23 @@ fn fly(args: &DemoArgs, stop: &std::sync::atomic::AtomicBool) -> Result<Vec<Scor
             }
             smol::Timer::after(Duration::from_millis(50)).await;
         }
-        let arena = Arena::paper(0.0);
-        let flight = Flight::past_the_block();
+        let flight = &course.route;
         println!(
-            "cstep demo: Crazyflie in the paper's arena (block centred at y = 0), {:.1} s, ROS_DOMAIN_ID {} (localhost only)",
-            args.duration,
+            "cstep demo: {}, {duration:.1} s, ROS_DOMAIN_ID {} (localhost only)",
+            course.title,
             std::env::var("ROS_DOMAIN_ID").unwrap_or_default()
         );
-        println!("{:>6} {:>6} {:>6} {:>6} {:>12} {:>8} {:>10}", "t (s)", "x (m)", "y (m)", "v m/s", "empowerment", "reward", "latency");
+        println!(
+            "{:>6} {:>6} {:>6} {:>6} {:>12} {:>8} {:>10}",
+            "t (s)", "x (m)", "y (m)", "v m/s", "empowerment", "reward", "latency"
+        );
         let mut sent: HashMap<(i32, u32), (f64, Instant)> = HashMap::new();
         let mut pending: HashMap<(i32, u32), Empowerment> = HashMap::new();
         let mut scored = Vec::new();
         let started = Instant::now();
-        let ticks = (args.duration * SCAN_RATE_HZ).floor() as usize;
+        let ticks = (duration * SCAN_RATE_HZ).floor() as usize;
+        // A ground robot faces where it goes, and keeps its heading when it stops.
+        let mut heading = 0.0_f64;
         for k in 0..=ticks + 5 {
             if stop.load(Ordering::SeqCst) {
                 break;
@@ -229,21 +329,57 @@ fn fly(args: &DemoArgs, stop: &std::sync::atomic::AtomicBool) -> Result<Vec<Scor
             if k <= ticks {
                 let t = k as f64 / SCAN_RATE_HZ;
                 let (p, v) = flight.at(t);
-                let stamp = Time { sec: t.floor() as i32, nanosec: ((t.fract()) * 1e9).round() as u32 };
-                let header = Header { stamp, frame_id: "odom".into() };
-                let mut odom = Odometry { header: header.clone(), child_frame_id: "base_link".into(), ..Default::default() };
+                let stamp = Time {
+                    sec: t.floor() as i32,
+                    nanosec: ((t.fract()) * 1e9).round() as u32,
+                };
+                let header = Header {
+                    stamp,
+                    frame_id: "odom".into(),
+                };
+                let mut odom = Odometry {
+                    header: header.clone(),
+                    child_frame_id: "base_link".into(),
+                    ..Default::default()
+                };
                 odom.pose.pose.position.x = p.x;
                 odom.pose.pose.position.y = p.y;
-                odom.pose.pose.position.z = arena.altitude;
-                odom.twist.twist.linear.x = v.x; // level, facing +x: body frame = world frame
-                odom.twist.twist.linear.y = v.y;
-                let mut goal = PoseStamped { header: header.clone(), ..Default::default() };
-                let end = flight.position(flight.duration(), arena.altitude);
-                (goal.pose.position.x, goal.pose.position.y, goal.pose.position.z) = (end.x, end.y, end.z);
+                odom.pose.pose.position.z = course.altitude;
+                if course.faces_travel && v.norm() > 0.0 {
+                    heading = v.y.atan2(v.x);
+                }
+                let attitude = if course.faces_travel {
+                    UnitQuaternion::from_euler_angles(0.0, 0.0, heading)
+                } else {
+                    UnitQuaternion::identity()
+                };
+                let q = attitude.into_inner().coords;
+                (odom.pose.pose.orientation.x, odom.pose.pose.orientation.y) = (q.x, q.y);
+                (odom.pose.pose.orientation.z, odom.pose.pose.orientation.w) = (q.z, q.w);
+                // The twist is in the body frame.
+                let body = attitude.inverse() * nalgebra::Vector3::new(v.x, v.y, 0.0);
+                odom.twist.twist.linear.x = body.x;
+                odom.twist.twist.linear.y = body.y;
+                let mut goal = PoseStamped {
+                    header: header.clone(),
+                    ..Default::default()
+                };
+                let end = flight.position(flight.duration(), course.altitude);
+                (
+                    goal.pose.position.x,
+                    goal.pose.position.y,
+                    goal.pose.position.z,
+                ) = (end.x, end.y, end.z);
                 // Best effort: the goal only shapes the task reward.
                 let _ = goal_pub.publish(goal);
-                let scan = arena.scene.scan(p, &UnitQuaternion::identity(), &PAPER_WORLD.lidar);
-                let scan_msg = scan_to_laser_scan(&scan, Header { stamp, frame_id: "base_link".into() });
+                let scan = course.scene.scan(p, &attitude, &course.lidar);
+                let scan_msg = scan_to_laser_scan(
+                    &scan,
+                    Header {
+                        stamp,
+                        frame_id: "base_link".into(),
+                    },
+                );
                 if odom_pub.publish(odom).is_ok() && scan_pub.publish(scan_msg).is_ok() {
                     sent.insert((stamp.sec, stamp.nanosec), (t, Instant::now()));
                 }
@@ -260,12 +396,26 @@ fn fly(args: &DemoArgs, stop: &std::sync::atomic::AtomicBool) -> Result<Vec<Scor
                         let latency = at.elapsed();
                         println!(
                             "{t:>6.1} {:>6.2} {:>6.2} {:>6.2} {:>12.3} {:>8.3} {:>7.1} ms{}",
-                            p.x, p.y, v.norm(), e.empowerment, r.reward,
+                            p.x,
+                            p.y,
+                            v.norm(),
+                            e.empowerment,
+                            r.reward,
                             latency.as_secs_f64() * 1e3,
-                            if e.valid { String::new() } else { format!("  ({})", e.status) }
+                            if e.valid {
+                                String::new()
+                            } else {
+                                format!("  ({})", e.status)
+                            }
                         );
                         scored.push(Scored {
-                            sample: FlightSample { t, x: p.x, y: p.y, empowerment: e.empowerment, reward: r.reward },
+                            sample: FlightSample {
+                                t,
+                                x: p.x,
+                                y: p.y,
+                                empowerment: e.empowerment,
+                                reward: r.reward,
+                            },
                             latency,
                             valid: e.valid,
                         });

@@ -1,4 +1,4 @@
-//! SVG plots of a flight: the arena with the path coloured by empowerment, and its time series.
+//! SVG plots of a run: the map with the path coloured by empowerment, and its time series.
 //!
 //! Written out by hand rather than with a plotting crate: plotters lays out text through a
 //! system font stack (font-kit) that a fresh machine need not have, and the two panels here
@@ -6,9 +6,17 @@
 
 use std::fmt::Write;
 
-use cstep::demo::arena::Arena;
+/// What the map panel draws: the world's bounds and its obstacles, each
+/// `(x_min, y_min, x_max, y_max)` in metres.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Map {
+    /// The walls' inner outline.
+    pub bounds: [f64; 4],
+    /// The obstacles inside.
+    pub obstacles: Vec<[f64; 4]>,
+}
 
-/// One scored moment of a flight.
+/// One scored moment of a run.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct FlightSample {
     /// Seconds since the start.
@@ -28,8 +36,8 @@ const MAP_HEIGHT: f64 = 480.0;
 const SERIES_HEIGHT: f64 = 260.0;
 const MARGIN: f64 = 50.0;
 
-/// The SVG document for `samples` flown in `arena`.
-pub fn flight_svg(arena: &Arena, samples: &[FlightSample]) -> String {
+/// The SVG document for `samples` taken on `map`.
+pub fn flight_svg(map: &Map, samples: &[FlightSample]) -> String {
     let mut svg = String::new();
     let height = MAP_HEIGHT + SERIES_HEIGHT;
     let _ = writeln!(
@@ -38,20 +46,20 @@ pub fn flight_svg(arena: &Arena, samples: &[FlightSample]) -> String {
     );
     let _ = writeln!(svg, r#"<rect width="100%" height="100%" fill="white"/>"#);
     let (lo, hi) = range(samples.iter().map(|s| s.empowerment));
-    map_panel(&mut svg, arena, samples, lo, hi);
+    map_panel(&mut svg, map, samples, lo, hi);
     series_panel(&mut svg, samples);
     svg.push_str("</svg>\n");
     svg
 }
 
-fn map_panel(svg: &mut String, arena: &Arena, samples: &[FlightSample], lo: f64, hi: f64) {
-    let [x0, y0, x1, y1] = arena.bounds;
+fn map_panel(svg: &mut String, map: &Map, samples: &[FlightSample], lo: f64, hi: f64) {
+    let [x0, y0, x1, y1] = map.bounds;
     let scale = ((WIDTH - 2.0 * MARGIN) / (x1 - x0)).min((MAP_HEIGHT - 2.0 * MARGIN) / (y1 - y0));
     let px = |x: f64| MARGIN + (x - x0) * scale;
     let py = |y: f64| MAP_HEIGHT - MARGIN - (y - y0) * scale;
     let _ = writeln!(
         svg,
-        r#"<text x="{MARGIN}" y="28" font-size="16">C-STEP along the flight (colour: empowerment, nats)</text>"#
+        r#"<text x="{MARGIN}" y="28" font-size="16">C-STEP along the path (colour: empowerment, nats)</text>"#
     );
     let rect = |svg: &mut String, [a, b, c, d]: [f64; 4], style: &str| {
         let _ = writeln!(
@@ -65,10 +73,12 @@ fn map_panel(svg: &mut String, arena: &Arena, samples: &[FlightSample], lo: f64,
     };
     rect(
         svg,
-        arena.bounds,
+        map.bounds,
         r##"fill="#f7f7f7" stroke="#333" stroke-width="3""##,
     );
-    rect(svg, arena.block, r##"fill="#800000""##);
+    for &obstacle in &map.obstacles {
+        rect(svg, obstacle, r##"fill="#800000""##);
+    }
     for s in samples {
         let _ = writeln!(
             svg,
@@ -210,11 +220,15 @@ mod tests {
                 reward: 0.5,
             })
             .collect();
-        let svg = flight_svg(&Arena::paper(0.0), &samples);
+        let map = Map {
+            bounds: [-0.5, -1.75, 4.5, 0.75],
+            obstacles: vec![[0.5, -0.25, 2.5, 0.25], [3.0, 0.0, 3.5, 0.5]],
+        };
+        let svg = flight_svg(&map, &samples);
         assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
         assert_eq!(svg.matches("<circle").count(), 20);
         assert_eq!(svg.matches("<polyline").count(), 2);
-        assert!(svg.contains("#800000"), "the block");
+        assert_eq!(svg.matches("#800000").count(), 2, "the obstacles");
         assert!(!svg.contains("NaN") && !svg.contains("inf"));
     }
 

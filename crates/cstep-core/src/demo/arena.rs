@@ -116,16 +116,21 @@ pub struct Flight {
 }
 
 impl Flight {
+    /// Straight legs through `waypoints` (at least one) at `speed` m/s.
+    pub fn new(waypoints: Vec<Vector2<f64>>, speed: f64) -> Self {
+        Self { waypoints, speed }
+    }
+
     /// The demo's flight through the arena with the block centred at y = 0: from the start
     /// region, down through the 1.5 m gap beside the block, up to the goal region, at 0.8 m/s.
     pub fn past_the_block() -> Self {
-        Self {
-            waypoints: [(-0.2, -0.4), (0.3, -1.1), (2.7, -1.1), (3.9, -0.3)]
+        Self::new(
+            [(-0.2, -0.4), (0.3, -1.1), (2.7, -1.1), (3.9, -0.3)]
                 .iter()
                 .map(|&(x, y)| Vector2::new(x, y))
                 .collect(),
-            speed: 0.8,
-        }
+            0.8,
+        )
     }
 
     /// Seconds the legs take.

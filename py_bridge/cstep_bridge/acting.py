@@ -28,6 +28,8 @@ from collections.abc import Callable
 
 import numpy as np
 
+from .errors import ConfigError
+
 ACTING_RULES = ("mode", "mean", "sample")
 """The rules a trained policy can act by (see the module docstring)."""
 DEFAULT_ACTING_RULE = "mode"
@@ -106,7 +108,7 @@ class SampledActor(Actor):
 def check_rule(rule: str) -> str:
     """``rule`` if it is one of :data:`ACTING_RULES`; a clear error otherwise."""
     if rule not in ACTING_RULES:
-        raise ValueError(f"acting rule must be one of {ACTING_RULES}, not {rule!r}")
+        raise ConfigError(f"acting rule must be one of {ACTING_RULES}, not {rule!r}")
     return rule
 
 

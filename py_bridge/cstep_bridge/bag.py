@@ -38,6 +38,8 @@ from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 
+from .errors import BagError
+
 INPUTS = {
     "odom": "nav_msgs/msg/Odometry",
     "scan": "sensor_msgs/msg/LaserScan",
@@ -65,10 +67,6 @@ CSTEP_MESSAGES = ("Empowerment", "EmpoweredReward")
 INTERRUPTED = 130
 """The exit code of a command that Ctrl-C cut short (as a shell reports SIGINT), but for
 ``record``, which Ctrl-C ends normally."""
-
-
-class BagError(Exception):
-    """A bag that cannot be read or written as asked: :func:`main` prints it as one line."""
 
 
 def new_bag(path: Path) -> Path:

@@ -40,6 +40,7 @@ from stable_baselines3.common.vec_env import DummyVecEnv, VecEnv, VecEnvWrapper,
 from stable_baselines3.common.vec_env.base_vec_env import VecEnvStepReturn
 
 from .env import REWARD_REQUEST
+from .errors import ConfigError
 
 
 class BatchedReward(VecEnvWrapper):
@@ -59,20 +60,20 @@ class BatchedReward(VecEnvWrapper):
         super().__init__(venv)
         modes = set(venv.get_attr("reward_mode"))
         if modes != {"deferred"} or not all(venv.get_attr("empowered")):
-            raise ValueError(
+            raise ConfigError(
                 "BatchedReward needs empowered envs with reward_mode='deferred', "
                 f"got reward modes {sorted(modes)}"
             )
         args = venv.get_attr("bridge_args")
         if any(a != args[0] for a in args):
-            raise ValueError(f"the envs would need different nodes: {args}")
+            raise ConfigError(f"the envs would need different nodes: {args}")
         sources = set(venv.get_attr("reward_source"))
         if len(sources) != 1:
-            raise ValueError(f"the envs take their rewards from different sources: {sources}")
+            raise ConfigError(f"the envs take their rewards from different sources: {sources}")
         self.scorer = None
         if sources == {"inprocess"}:
             if bridge is not None:
-                raise ValueError("envs with reward_source='inprocess' take no bridge")
+                raise ConfigError("envs with reward_source='inprocess' take no bridge")
             from .scoring import bridge_scorer
 
             self.scorer = bridge_scorer(args[0]["safety_coefficient"], args[0]["node_params"])

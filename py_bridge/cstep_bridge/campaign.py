@@ -34,6 +34,7 @@ from __future__ import annotations
 import argparse
 import fcntl
 import json
+import logging
 import os
 import signal
 import socket
@@ -45,6 +46,12 @@ from pathlib import Path
 from typing import Any
 
 import yaml
+
+from .cli import log_to_stdout
+from .errors import ConfigError, RayUnavailable
+
+log = logging.getLogger(__name__)
+"""Where this module's messages go (on stdout under the command-line tools)."""
 
 POLL_SECONDS = 5.0
 """How often the lanes are checked for finished runs."""
@@ -98,19 +105,19 @@ class Plan:
         required = ("env", "protocol", "timesteps", "agents", "seeds", "runs", "models")
         missing = [k for k in required if k not in data]
         if missing:
-            raise ValueError(f"{path}: missing {', '.join(missing)}")
+            raise ConfigError(f"{path}: missing {', '.join(missing)}")
         unknown = set(data) - set(required) - {"train_args"}
         if unknown:
-            raise ValueError(f"{path}: unknown keys {sorted(unknown)}")
+            raise ConfigError(f"{path}: unknown keys {sorted(unknown)}")
         for key in ("agents", "seeds"):
             values = data[key]
             if not isinstance(values, list) or not values:
-                raise ValueError(f"{path}: {key} must be a non-empty list, not {values!r}")
+                raise ConfigError(f"{path}: {key} must be a non-empty list, not {values!r}")
             if len(set(map(str, values))) != len(values):
-                raise ValueError(f"{path}: {key} lists a value twice: {values}")
+                raise ConfigError(f"{path}: {key} lists a value twice: {values}")
         for agent in data["agents"]:
             if agent != "unempowered" and not _is_coefficient(str(agent)):
-                raise ValueError(f"{path}: agent {agent!r} is neither 'unempowered' nor c<value>")
+                raise ConfigError(f"{path}: agent {agent!r} is neither 'unempowered' nor c<value>")
         plan = cls(
             env=str(data["env"]),
             protocol=str(data["protocol"]),
@@ -142,10 +149,10 @@ class Plan:
         try:
             _, settings = self.training_settings(self.schedule()[0])
         except (SystemExit, ValueError) as err:
-            raise ValueError(f"{path}: the trainer refuses the plan's arguments ({err})") from err
+            raise ConfigError(f"{path}: the trainer refuses the plan's arguments ({err})") from err
         validation = settings.get("validation")
         if not validation or validation["every"] > self.timesteps:
-            raise ValueError(
+            raise ConfigError(
                 f"{path}: the runs never validate (validation {validation}, {self.timesteps} "
                 "steps), so there is no best-validation model to export"
             )
@@ -194,7 +201,7 @@ def _set_aside_if_unresumable(directory: Path, name: str) -> None:
     if (directory / "run.json").exists() and latest_checkpoint(directory) is None:
         aside = directory.with_name(f"{name}.abandoned-{time.strftime('%Y%m%d-%H%M%S')}")
         directory.rename(aside)
-        print(f"{name}: no checkpoint to resume from; moved to {aside}, starting again")
+        log.info(f"{name}: no checkpoint to resume from; moved to {aside}, starting again")
 
 
 def _record_stretch(
@@ -242,7 +249,7 @@ def prepare(plan: Plan, run: Run) -> None:
     directory = plan.root / run.directory
     _set_aside_if_unresumable(directory, run.name)
     directory.mkdir(parents=True, exist_ok=True)
-    print(f"{run.name}: {' '.join(plan.train_command(run)[1:])}", flush=True)
+    log.info(f"{run.name}: {' '.join(plan.train_command(run)[1:])}")
 
 
 def launch(plan: Plan, run: Run, env: dict[str, str]) -> subprocess.Popen:
@@ -314,7 +321,7 @@ def run_campaign(plan: Plan, lanes) -> int:
     pending = []
     for run in plan.schedule():
         if (plan.root / run.export / "model.zip").exists():
-            print(f"{run.name}: done (exported to {run.export})", flush=True)
+            log.info(f"{run.name}: done (exported to {run.export})")
         else:
             pending.append(run)
     active: dict[Run, Any] = {}
@@ -333,15 +340,15 @@ def run_campaign(plan: Plan, lanes) -> int:
                     continue
                 del active[run]
                 if ok:
-                    print(f"{run.name}: done, exported to {run.export}", flush=True)
+                    log.info(f"{run.name}: done, exported to {run.export}")
                 else:
                     failed += 1
-                    print(f"{run.name}: failed; see {run.directory / 'train.log'}", flush=True)
+                    log.info(f"{run.name}: failed; see {run.directory / 'train.log'}")
     finally:
         signal.signal(signal.SIGTERM, previous)
         for run, handle in active.items():
             lanes.stop(run, handle)
-            print(f"{run.name}: stopped; it resumes from its last checkpoint", flush=True)
+            log.info(f"{run.name}: stopped; it resumes from its last checkpoint")
     return failed
 
 
@@ -356,6 +363,7 @@ def _export(plan: Plan, run: Run, env: dict[str, str]) -> bool:
 
 def main(argv: list[str] | None = None) -> int:
     """Entry point of ``python -m cstep_bridge.campaign``."""
+    log_to_stdout()
     ap = argparse.ArgumentParser(prog="python -m cstep_bridge.campaign", description=__doc__)
     ap.add_argument("plan", type=Path, help="the campaign's YAML plan")
     ap.add_argument(
@@ -404,7 +412,7 @@ def main(argv: list[str] | None = None) -> int:
             if args.backend == "local":
                 failed = run_campaign(plan, LocalLanes(plan, args.lanes))
             else:
-                from .ray_backend import RayLanes, RayUnavailable
+                from .ray_backend import RayLanes
 
                 try:
                     lanes = RayLanes(plan, args.lanes, args.address)

@@ -44,6 +44,7 @@ from gymnasium import spaces
 from .collision import COLLISION_VALUES, held_return
 from .curriculum import training_endpoints, training_fraction
 from .envs import REWARD_SOURCES
+from .errors import ConfigError
 from .sim import CONTROL_HZ, Arena, DroneSim, DroneState
 from .task_reward import task_reward
 from .world import LIDAR_BEAMS, LIDAR_RANGE, clipped_ranges
@@ -58,7 +59,7 @@ RENDER_MODES = ["human", "rgb_array"]
 def checked_render_mode(render_mode: str | None) -> str | None:
     """``render_mode`` if the envs know it; a clear error otherwise."""
     if render_mode not in (None, *RENDER_MODES):
-        raise ValueError(f"render_mode must be one of {RENDER_MODES} or None, got {render_mode!r}")
+        raise ConfigError(f"render_mode must be one of {RENDER_MODES} or None, got {render_mode!r}")
     return render_mode
 
 
@@ -134,24 +135,24 @@ class EmpoweredRewardEnv(gym.Env):
         the held floor, it should be the trainer's)."""
         super().__init__()
         if safety_coefficient <= 0:
-            raise ValueError(f"safety_coefficient must be > 0, not {safety_coefficient}")
+            raise ConfigError(f"safety_coefficient must be > 0, not {safety_coefficient}")
         if reward_mode not in REWARD_MODES:
-            raise ValueError(f"reward_mode must be one of {REWARD_MODES}, not {reward_mode!r}")
+            raise ConfigError(f"reward_mode must be one of {REWARD_MODES}, not {reward_mode!r}")
         if reward_source not in REWARD_SOURCES:
-            raise ValueError(
+            raise ConfigError(
                 f"reward_source must be one of {REWARD_SOURCES}, not {reward_source!r}"
             )
         if reward_source == "inprocess" and (reward_mode == "topic" or bridge is not None):
-            raise ValueError(
+            raise ConfigError(
                 "reward_source='inprocess' scores without a node: it takes no bridge and no "
                 "reward_mode='topic'"
             )
         if collision_value not in COLLISION_VALUES:
-            raise ValueError(
+            raise ConfigError(
                 f"collision_value must be one of {COLLISION_VALUES}, not {collision_value!r}"
             )
         if not 0 < gamma <= 1:
-            raise ValueError(f"gamma must be in (0, 1], not {gamma}")
+            raise ConfigError(f"gamma must be in (0, 1], not {gamma}")
         self.collision_value = collision_value
         self.gamma = float(gamma)
         self.empowered = empowered

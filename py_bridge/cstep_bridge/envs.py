@@ -18,6 +18,8 @@ from typing import Any
 import gymnasium as gym
 from gymnasium.envs.registration import load_env_creator
 
+from .errors import ConfigError
+
 
 @dataclass(frozen=True)
 class EnvEntry:
@@ -50,7 +52,7 @@ def make_env(
     """A new environment ``name`` (one of :data:`ENV_NAMES`), unwrapped; ``kwargs`` go to its
     constructor."""
     if name not in ENVS:
-        raise ValueError(f"unknown environment {name!r}: choose one of {', '.join(ENV_NAMES)}")
+        raise ConfigError(f"unknown environment {name!r}: choose one of {', '.join(ENV_NAMES)}")
     return load_env_creator(ENVS[name].entry_point)(empowered, safety_coefficient, **kwargs)
 
 

@@ -15,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .errors import ConfigError
 from .resources import PACKAGE
 from .sim import Arena
 
@@ -56,7 +57,7 @@ def load(path: Path = DEFAULT_PATH) -> list[Arena]:
             for c in doc["configurations"]
         ]
     except (OSError, ValueError, KeyError, TypeError) as err:
-        raise ValueError(f"{path}: not a readable evaluation set ({err})") from err
+        raise ConfigError(f"{path}: not a readable evaluation set ({err})") from err
 
 
 def main() -> int:

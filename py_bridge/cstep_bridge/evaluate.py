@@ -44,12 +44,14 @@ import numpy as np
 
 from . import comparison, metrics, paper_results, training_log
 from .acting import ACTING_RULES, DEFAULT_ACTING_RULE
+from .cli import log_to_stdout
 from .envs import ENV_NAMES
 from .episode_cache import EpisodeCache
+from .errors import RayUnavailable
 from .flights import configurations, fly_model
 from .paper_results import PaperAgent
 from .plots import MapPanel, Path2D, paths_figure, seed_figure, threshold_figure, training_curves
-from .ray_backend import RayPool, RayUnavailable
+from .ray_backend import RayPool
 
 FINE_THRESHOLDS = tuple(np.round(np.arange(0.05, 0.501, 0.025), 3))
 DRONE_PANELS = 6
@@ -470,6 +472,7 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
 
 def main(argv: list[str] | None = None) -> int:
     """Entry point of ``python -m cstep_bridge.evaluate``."""
+    log_to_stdout()
     args = parse_args(argv)
     labels = args.label or [None] * len(args.model)
     models = [find_agent(m, lb) for m, lb in zip(args.model, labels, strict=True)]

@@ -9,6 +9,7 @@ the simulation): what :mod:`~cstep_bridge.episode_cache` keys its entries on.
 
 from __future__ import annotations
 
+import logging
 from concurrent.futures import Executor, ProcessPoolExecutor
 from contextlib import ExitStack
 from multiprocessing import get_context
@@ -21,6 +22,10 @@ from . import metrics
 from .acting import DEFAULT_ACTING_RULE, actor
 from .envs import make_env
 from .episode_cache import EpisodeCache, entry_key
+from .errors import ConfigError
+
+log = logging.getLogger(__name__)
+"""Where this module's messages go (on stdout under the command-line tools)."""
 
 CHUNK = 10
 """Episodes a worker flies per task: the grain at which a cached evaluation resumes."""
@@ -34,7 +39,7 @@ def configurations(env: str, eval_set: Path | None = None) -> list[Any]:
 
         return load(eval_set or DEFAULT_PATH)
     if eval_set is not None:
-        raise ValueError("--eval-set: only the drone takes an evaluation set from a file")
+        raise ConfigError("--eval-set: only the drone takes an evaluation set from a file")
     from .maze import configurations as maze_configurations
 
     return maze_configurations()
@@ -144,9 +149,7 @@ def fly_model(
     done = cache.load(key) if cache else {}
     missing = [i for i in indices if i not in done]
     if cache and len(missing) < len(indices):
-        print(
-            f"  {len(indices) - len(missing)} of {len(indices)} episodes from the cache", flush=True
-        )
+        log.info(f"  {len(indices) - len(missing)} of {len(indices)} episodes from the cache")
     if missing:
         chunks = [missing[i : i + CHUNK] for i in range(0, len(missing), CHUNK)]
         n = len(chunks)

@@ -24,6 +24,8 @@ from typing import Any
 
 import numpy as np
 
+from .errors import ConfigError
+
 SAMPLE = 1024
 """Observations of the last rollout kept to measure the noise on."""
 
@@ -42,10 +44,10 @@ class NoiseCap:
             return None
         unknown = set(value) - {"start", "end"}
         if unknown:
-            raise ValueError(f"noise_cap: unknown keys {sorted(unknown)}")
+            raise ConfigError(f"noise_cap: unknown keys {sorted(unknown)}")
         cap = cls(float(value["start"]), float(value["end"]))
         if not 0 < cap.end <= cap.start:
-            raise ValueError(f"noise_cap: need 0 < end <= start, not {value}")
+            raise ConfigError(f"noise_cap: need 0 < end <= start, not {value}")
         return cap
 
     def at(self, progress: float) -> float:
@@ -105,7 +107,7 @@ def make_callback(cap: NoiseCap):
 
         def _on_training_start(self) -> None:
             if not self.model.use_sde:
-                raise ValueError("noise_cap needs use_sde (it caps gSDE's noise)")
+                raise ConfigError("noise_cap needs use_sde (it caps gSDE's noise)")
             self.kept: np.ndarray | None = None
 
         def _on_rollout_start(self) -> None:

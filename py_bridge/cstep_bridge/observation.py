@@ -23,6 +23,8 @@ import torch
 from stable_baselines3.common.torch_layers import BaseFeaturesExtractor
 from stable_baselines3.common.vec_env import VecEnv, VecNormalize
 
+from .errors import ConfigError
+
 OBSERVATIONS = ("raw", "goal")
 """The encodings a protocol's ``observation`` key may name."""
 
@@ -71,9 +73,9 @@ class PartialVecNormalize(VecNormalize):
 def check(observation: str, env: str) -> None:
     """Raises ValueError when ``observation`` is no encoding, or one ``env`` does not have."""
     if observation not in OBSERVATIONS:
-        raise ValueError(f"observation must be one of {OBSERVATIONS}, not {observation!r}")
+        raise ConfigError(f"observation must be one of {OBSERVATIONS}, not {observation!r}")
     if observation != "raw" and env != "drone":
-        raise ValueError(f"observation {observation!r} is the drone's; the {env} has only 'raw'")
+        raise ConfigError(f"observation {observation!r} is the drone's; the {env} has only 'raw'")
 
 
 def policy_kwargs(observation: str) -> dict[str, Any]:

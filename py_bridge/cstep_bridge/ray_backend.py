@@ -20,6 +20,7 @@ campaign on the machine that owns the plan keeps the order, the lock and the pri
 
 from __future__ import annotations
 
+import logging
 import os
 import time
 from collections.abc import Callable
@@ -28,16 +29,16 @@ from pathlib import Path
 from typing import Any, Self
 
 from .campaign import Plan, Run, finish, launch, stop, trainer_env
+from .errors import RayUnavailable
+
+log = logging.getLogger(__name__)
+"""Where this module's messages go (on stdout under the command-line tools)."""
 
 CPUS_PER_RUN = 1
 """CPUs a training run (one lane: one trainer, one thread) or a chunk of flights asks Ray for."""
 
 WAIT_SECONDS = 1.0
 """How often a task checks its trainer: a cancel is noticed between two checks."""
-
-
-class RayUnavailable(RuntimeError):
-    """``--backend ray`` without Ray installed."""
 
 
 def _ray():
@@ -119,7 +120,7 @@ class RayLanes:
         try:
             return self.ray.get(ref)
         except self.ray.exceptions.RayError as err:
-            print(f"{run.name}: its Ray task failed: {err}", flush=True)
+            log.info(f"{run.name}: its Ray task failed: {err}")
             return False
 
     def stop(self, run: Run, ref) -> None:

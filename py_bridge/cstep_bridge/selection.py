@@ -36,6 +36,7 @@ from __future__ import annotations
 import argparse
 import csv
 import json
+import logging
 import shutil
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import dataclass
@@ -46,7 +47,12 @@ from typing import Any
 import numpy as np
 
 from .acting import ACTING_RULES, DEFAULT_ACTING_RULE, check_rule
+from .cli import log_to_stdout
+from .errors import ConfigError
 from .training_log import VALIDATION_CSV
+
+log = logging.getLogger(__name__)
+"""Where this module's messages go (on stdout under the command-line tools)."""
 
 DRONE_SEED = 7_331
 """Seed of the drone's validation arenas (not the evaluation set's)."""
@@ -92,14 +98,14 @@ class Validation:
             return None
         unknown = set(value) - {"every", "episodes", "action"}
         if unknown:
-            raise ValueError(f"validation: unknown keys {sorted(unknown)}")
+            raise ConfigError(f"validation: unknown keys {sorted(unknown)}")
         try:
             action = check_rule(value.get("action", DEFAULT_ACTING_RULE))
         except ValueError as err:
-            raise ValueError(f"validation: {err}") from err
+            raise ConfigError(f"validation: {err}") from err
         v = cls(int(value.get("every", 50_000)), int(value.get("episodes", 40)), action)
         if v.every <= 0 or v.episodes <= 0:
-            raise ValueError("validation: every and episodes must be > 0")
+            raise ConfigError("validation: every and episodes must be > 0")
         return v
 
 
@@ -200,7 +206,7 @@ def make_callback(env_name: str, validation: Validation, out: Path):
                 w.writerow(csv_row(self.num_timesteps, result, improved))
             for k, v in result.items():
                 self.logger.record(f"validation/{k}", v)
-            print(
+            log.info(
                 f"validation at {self.num_timesteps}: success {result['success_rate']:.0%}, "
                 f"collisions {result['collision_rate']:.0%}, mean length "
                 f"{result['mean_length']:.0f} steps{' (best so far)' if improved else ''}",
@@ -275,8 +281,7 @@ def reselect(
     episodes = episodes or validation.episodes
     found = validated_checkpoints(run, start)
     env_name, n = settings["env"], len(found)
-    print(f"{run}: {n} checkpoints, {episodes} validation episodes each, "
-          f"acting by its {acting}", flush=True)  # fmt: skip
+    log.info(f"{run}: {n} checkpoints, {episodes} validation episodes each, acting by its {acting}")
     best, best_key, rows = None, None, []
     with ProcessPoolExecutor(min(jobs, n), mp_context=get_context("spawn")) as pool:
         paths = [p for _, p in found]
@@ -287,21 +292,23 @@ def reselect(
             if improved:
                 best, best_key = path, key
             rows.append(csv_row(steps, result, improved))
-            print(f"  {steps}: success {result['success_rate']:.0%}, collisions "
-                  f"{result['collision_rate']:.0%}{' (best so far)' if improved else ''}",
-                  flush=True)  # fmt: skip
+            log.info(
+                f"  {steps}: success {result['success_rate']:.0%}, collisions "
+                f"{result['collision_rate']:.0%}{' (best so far)' if improved else ''}"
+            )
     with (run / f"validation-{name}.csv").open("w", newline="") as f:
         csv.writer(f).writerows([CSV_COLUMNS, *rows])
     chosen = run / f"best_model-{name}.zip"
     shutil.copyfile(best, chosen)
     if stats_path(best).exists():
         shutil.copyfile(stats_path(best), stats_path(chosen))
-    print(f"best: {best.name} -> {chosen}", flush=True)
+    log.info(f"best: {best.name} -> {chosen}")
     return chosen
 
 
 def main(argv: list[str] | None = None) -> int:
     """Entry point of ``python -m cstep_bridge.selection``."""
+    log_to_stdout()
     ap = argparse.ArgumentParser(
         prog="python -m cstep_bridge.selection",
         description="Select a finished run's best checkpoint again: acting by another rule, "

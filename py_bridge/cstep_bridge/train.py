@@ -37,6 +37,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import logging
 import re
 import sys
 import time
@@ -47,8 +48,12 @@ from typing import Any
 import numpy as np
 
 from . import protocol
+from .cli import log_to_stdout
 from .envs import ENV_NAMES, REWARD_SOURCES, make_env
 from .normalization import stats_path
+
+log = logging.getLogger(__name__)
+"""Where this module's messages go (on stdout under the command-line tools)."""
 
 # Episode fields the Monitor writes and the summaries read.
 INFO_KEYWORDS = ("success", "collision")
@@ -207,7 +212,7 @@ def execution_defaults(args: argparse.Namespace, settings: dict[str, Any]) -> No
             )
         args.n_envs = int(stored)
     elif stored is not None and args.n_envs != stored:
-        print(f"--n-envs {args.n_envs}: the run began with {stored} envs per update", flush=True)
+        log.info(f"--n-envs {args.n_envs}: the run began with {stored} envs per update")
     if args.vec_env is None:
         args.vec_env = "subproc" if args.n_envs > 1 else "dummy"
 
@@ -216,7 +221,7 @@ def _whole_zip(path: Path) -> bool:
     """Whether ``path`` is a readable zip; says so when it is not."""
     if zipfile.is_zipfile(path):
         return True
-    print(f"{path}: not a whole zip file (a save cut short?), passed over", flush=True)
+    log.warning(f"{path}: not a whole zip file (a save cut short?), passed over")
     return False
 
 
@@ -555,6 +560,7 @@ def train(args: argparse.Namespace) -> Path:
 
 def main(argv: list[str] | None = None) -> int:
     """Entry point of ``python -m cstep_bridge.train``."""
+    log_to_stdout()
     train(parse_args(argv))
     return 0
 

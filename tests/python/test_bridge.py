@@ -15,7 +15,8 @@ import pybullet as p
 import pytest
 from conftest import REPO
 from cstep_bridge.env import CStepDroneEnv
-from cstep_bridge.ros_io import CStepNode, RewardTimeout, RosBridge, odometry_msg, scan_msg
+from cstep_bridge.errors import RewardTimeout
+from cstep_bridge.ros_io import CStepNode, RosBridge, odometry_msg, scan_msg
 from cstep_bridge.sim import LIDAR_BEAMS, Arena, DroneSim
 from gymnasium.utils.env_checker import check_env
 from node_rig import cstep_eval

@@ -13,7 +13,8 @@ from conftest import REPO
 from cstep_bridge.campaign import Plan
 from cstep_bridge.campaign import main as campaign_main
 from cstep_bridge.curriculum import Curriculum
-from cstep_bridge.ray_backend import RayPool, RayUnavailable
+from cstep_bridge.errors import RayUnavailable
+from cstep_bridge.ray_backend import RayPool
 from module_cli import run
 
 TINY = [

@@ -16,8 +16,8 @@ import numpy as np
 import pytest
 from cstep_bridge import resources
 from cstep_bridge.env import CStepDroneEnv
+from cstep_bridge.errors import ResourceNotFound
 from cstep_bridge.maze import CStepMazeEnv
-from cstep_bridge.resources import ResourceNotFound
 from cstep_bridge.ros_io import CStepNode
 from cstep_bridge.sim import Arena
 from cstep_bridge.world import RENDER_SIZE

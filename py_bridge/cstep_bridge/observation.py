@@ -10,7 +10,10 @@ last metre as wide as the first ones. The rest of the observation is normalised 
 The encoding is a layer of the policy (:class:`GoalEncoding`, a features extractor without
 weights, saved in the model file), and the normalisation that spares the goal
 (:class:`PartialVecNormalize`) is pickled beside the model like SB3's own, so flying a model needs
-nothing but the environment's raw observation and the model's files.
+nothing but the environment's raw observation and the model's files. Both pickles name this
+module's path, ``cstep_bridge.observation``: committed models load only while the two classes
+stay here, which is why this training module sits beside the subpackages rather than in
+:mod:`cstep_bridge.training`.
 """
 
 from __future__ import annotations

@@ -16,8 +16,8 @@ import tempfile
 from pathlib import Path
 
 import numpy as np
-from cstep_bridge.flights import configurations, fly_saved
-from cstep_bridge.train import parse_args, train
+from cstep_bridge.evaluation.flights import configurations, fly_saved
+from cstep_bridge.training.trainer import parse_args, train
 from stable_baselines3 import PPO
 
 HERE = Path(__file__).resolve().parent

@@ -11,7 +11,7 @@ from behaviour_pin import (
     evaluation_numbers,
     training_numbers,
 )
-from cstep_bridge.train import parse_args, train
+from cstep_bridge.training.trainer import parse_args, train
 
 PINNED = json.loads(FIXTURE.read_text())
 

@@ -10,11 +10,11 @@ from pathlib import Path
 import pytest
 import yaml
 from conftest import REPO
-from cstep_bridge.campaign import Plan
-from cstep_bridge.campaign import main as campaign_main
-from cstep_bridge.curriculum import Curriculum
 from cstep_bridge.errors import RayUnavailable
-from cstep_bridge.ray_backend import RayPool
+from cstep_bridge.training.campaign import Plan
+from cstep_bridge.training.campaign import main as campaign_main
+from cstep_bridge.training.curriculum import Curriculum
+from cstep_bridge.training.ray_backend import RayPool
 from module_cli import run
 
 TINY = [

@@ -1,4 +1,4 @@
-"""cstep_bridge.scoring: the node's scoring step in this process (the cstep_scoring extension) —
+"""cstep_bridge.reward.scoring: the node's scoring step in this process (the cstep_scoring extension) —
 the same answers, bit for bit, as a live `cstep node`'s ``/cstep/evaluate_batch`` over real DDS,
 for both models; its argument errors; the envs and the trainer with ``reward_source="inprocess"``
 (real PyBullet, real SB3 PPO)."""
@@ -10,12 +10,17 @@ import gymnasium as gym
 import numpy as np
 import pytest
 from conftest import wait_until
-from cstep_bridge.batched_reward import make_batched_vec_env
-from cstep_bridge.maze import NODE_PARAMS
-from cstep_bridge.ros_io import STATES_PER_CALL, CStepNode
-from cstep_bridge.scoring import Scorer, bridge_scorer
-from cstep_bridge.train import load_settings
-from cstep_bridge.world import LIDAR_ANGLE_INCREMENT, LIDAR_ANGLE_MIN, LIDAR_RANGE, LIDAR_RANGE_MIN
+from cstep_bridge.envs.maze import NODE_PARAMS
+from cstep_bridge.reward.scoring import Scorer, bridge_scorer
+from cstep_bridge.ros.bridge import STATES_PER_CALL, CStepNode
+from cstep_bridge.sim.world import (
+    LIDAR_ANGLE_INCREMENT,
+    LIDAR_ANGLE_MIN,
+    LIDAR_RANGE,
+    LIDAR_RANGE_MIN,
+)
+from cstep_bridge.training.batched_reward import make_batched_vec_env
+from cstep_bridge.training.trainer import load_settings
 from cstep_msgs.srv import EvaluateBatch
 from geometry_msgs.msg import Point
 from module_cli import run

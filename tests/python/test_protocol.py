@@ -5,11 +5,12 @@ import json
 
 import numpy as np
 import pytest
-from cstep_bridge import curriculum, eval_set, protocol, selection
 from cstep_bridge.envs import make_env
-from cstep_bridge.maze import LAYOUT
-from cstep_bridge.sim import Arena
-from cstep_bridge.train import build_model, parse_args, run_settings
+from cstep_bridge.evaluation import eval_set
+from cstep_bridge.sim.drone import Arena
+from cstep_bridge.sim.maze_layout import LAYOUT
+from cstep_bridge.training import curriculum, protocol, selection
+from cstep_bridge.training.trainer import build_model, parse_args, run_settings
 from stable_baselines3 import PPO
 from stable_baselines3.common.env_util import make_vec_env
 
@@ -343,7 +344,7 @@ def test_validation_keeps_the_best_model_and_logs_each_round(tmp_path):
 
 
 def test_the_floor_held_for_the_remaining_steps_is_its_discounted_sum():
-    from cstep_bridge.collision import held_return
+    from cstep_bridge.reward.collision import held_return
 
     assert held_return(-2.0, 1, 0.99) == pytest.approx(-2.0)  # the last step: itself only
     assert held_return(-2.0, 3, 0.5) == pytest.approx(-2.0 * (1 + 0.5 + 0.25))

@@ -9,10 +9,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 import torch
-from cstep_bridge import training_log
 from cstep_bridge.envs import make_env
-from cstep_bridge.evaluate import Agent, group_seeds
-from cstep_bridge.train import build_model, learn_sde_features, parse_args, run_settings
+from cstep_bridge.evaluation.evaluate import Agent, group_seeds
+from cstep_bridge.training import training_log
+from cstep_bridge.training.trainer import build_model, learn_sde_features, parse_args, run_settings
 from module_cli import run
 from stable_baselines3 import PPO
 from stable_baselines3.common.env_util import make_vec_env

@@ -16,8 +16,8 @@ from pathlib import Path
 
 import numpy as np
 import torch
-from cstep_bridge.normalization import stats_path
-from cstep_bridge.train import load_settings, training_vec_env
+from cstep_bridge.training.normalization import stats_path
+from cstep_bridge.training.trainer import load_settings, training_vec_env
 from stable_baselines3 import PPO
 from stable_baselines3.common.callbacks import BaseCallback
 from stable_baselines3.common.vec_env import VecNormalize

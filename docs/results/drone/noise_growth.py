@@ -19,11 +19,11 @@ from pathlib import Path
 
 import numpy as np
 import torch
-from cstep_bridge.env import CStepDroneEnv
-from cstep_bridge.flights import configurations, reset_options
-from cstep_bridge.noise_cap import state_noise
-from cstep_bridge.normalization import observation_normalizer
-from cstep_bridge.train import load_settings
+from cstep_bridge.envs.drone import CStepDroneEnv
+from cstep_bridge.evaluation.flights import configurations, reset_options
+from cstep_bridge.training.noise_cap import state_noise
+from cstep_bridge.training.normalization import observation_normalizer
+from cstep_bridge.training.trainer import load_settings
 from stable_baselines3 import PPO
 
 

@@ -18,7 +18,7 @@ import json
 import re
 from pathlib import Path
 
-from cstep_bridge import protocol
+from cstep_bridge.training import protocol
 from run_row import measures
 
 BAR_SUCCESS, BAR_COLLISIONS = 0.85, 0.05

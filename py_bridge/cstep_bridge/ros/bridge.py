@@ -66,11 +66,11 @@ from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy, qos_profi
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import LaserScan
 
-from .errors import ConfigError, NodeDied, NodeError, RewardTimeout
-from .resources import config_file, cstep_binary
-from .sim import DroneState
-from .task_reward import task_reward
-from .world import LIDAR_ANGLE_INCREMENT, LIDAR_ANGLE_MIN, LIDAR_RANGE, LIDAR_RANGE_MIN
+from ..errors import ConfigError, NodeDied, NodeError, RewardTimeout
+from ..resources import config_file, cstep_binary
+from ..reward.task import task_reward
+from ..sim.drone import DroneState
+from ..sim.world import LIDAR_ANGLE_INCREMENT, LIDAR_ANGLE_MIN, LIDAR_RANGE, LIDAR_RANGE_MIN
 
 RELIABLE = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
 LATCHED = QoSProfile(

@@ -31,7 +31,7 @@ before the agent can stop at a goal; ``held`` keeps the agent on them until it c
 sweep's failure: agents that circle 0.3 m from the goal, ``docs/results/protocol.md``). Only the
 promotions change; the task, its reward and its success stay the same.
 
-Configured by a protocol's ``curriculum`` entry (see :mod:`~cstep_bridge.protocol`)::
+Configured by a protocol's ``curriculum`` entry (see :mod:`~cstep_bridge.training.protocol`)::
 
     curriculum:
       levels: [0.25, 0.5, 0.75, 1.0]   # fractions f, last = 1
@@ -52,7 +52,7 @@ from typing import Any
 
 import numpy as np
 
-from .errors import ConfigError
+from ..errors import ConfigError
 
 log = logging.getLogger(__name__)
 """Where this module's messages go (on stdout under the command-line tools)."""
@@ -183,6 +183,7 @@ def make_callback(curriculum: Curriculum, state: Path):
     """An SB3 callback that sets the envs' ``goal_fraction`` and moves up the levels; each
     promotion is kept in the JSON file ``state``, so a resumed run goes on from the level of the
     checkpoint it resumes."""
+    # stable-baselines3 is the train extra: the envs use this module without it
     from stable_baselines3.common.callbacks import BaseCallback
 
     class GoalCurriculum(BaseCallback):

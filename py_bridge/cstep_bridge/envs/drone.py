@@ -7,25 +7,25 @@ the current position at the fixed 1 m altitude and tracked by the PID for one 30
 Reward: ``exp(−‖p − goal‖)`` (``empowered=False``) or the node's empowered reward
 ``exp(−‖p − goal‖) · log(c · λ(R_free))`` for exactly this state. Terminates on contact or tilt
 > 0.9 rad; truncates at 30 s. What a collision costs an empowered agent is ``collision_value``
-(:mod:`~cstep_bridge.collision`): nothing more (``"none"``, the paper as written) or the node's
+(:mod:`~cstep_bridge.reward.collision`): nothing more (``"none"``, the paper as written) or the node's
 floor reward held for the steps the episode had left (``"floor"``). ``info``: success (came
 within ``success_radius`` of the goal), at_goal (is within it now), collision, time,
 min_obstacle_distance (centre to nearest wall or block face, m), distance_to_goal (m), position
 (x, y, m).
 
 :class:`EmpoweredRewardEnv` holds what this env shares with the point maze
-(:mod:`~cstep_bridge.maze`): the choice of reward and the bridge to the node.
+(:mod:`~cstep_bridge.envs.maze`): the choice of reward and the bridge to the node.
 
 An empowered env gets its reward from one of two ``reward_source`` s, the same scoring function
 either way and the same answers, bit for bit: ``"node"`` (default), a ``cstep node`` over ROS,
-or ``"inprocess"``, the node's core scoring in this process (:mod:`~cstep_bridge.scoring`, no
+or ``"inprocess"``, the node's core scoring in this process (:mod:`~cstep_bridge.reward.scoring`, no
 ROS, no node). From the node it comes in one of three ``reward_mode`` s. ``"service"`` (default) and
-``"topic"`` ask a node themselves, through the :class:`~cstep_bridge.ros_io.RosBridge` given or
+``"topic"`` ask a node themselves, through the :class:`~cstep_bridge.ros.bridge.RosBridge` given or
 one of their own (with a private node). ``"deferred"`` asks none: ``step`` returns a NaN reward
 and leaves a :class:`RewardRequest` in ``info[REWARD_REQUEST]``, and a
-:class:`~cstep_bridge.batched_reward.BatchedReward` vec env wrapper scores the requests of all
+:class:`~cstep_bridge.training.batched_reward.BatchedReward` vec env wrapper scores the requests of all
 its envs in one node call per vector step (several beyond
-:data:`~cstep_bridge.ros_io.STATES_PER_CALL` envs) and fills the rewards in (what the trainer
+:data:`~cstep_bridge.ros.bridge.STATES_PER_CALL` envs) and fills the rewards in (what the trainer
 does). In process, ``"service"`` scores each step at once and ``"deferred"`` leaves the request
 for the wrapper, which then scores the vector step in one batch; ``"topic"`` needs a node.
 """
@@ -41,13 +41,13 @@ import gymnasium as gym
 import numpy as np
 from gymnasium import spaces
 
-from .collision import COLLISION_VALUES, held_return
-from .curriculum import training_endpoints, training_fraction
-from .envs import REWARD_SOURCES
-from .errors import ConfigError
-from .sim import CONTROL_HZ, Arena, DroneSim, DroneState
-from .task_reward import task_reward
-from .world import LIDAR_BEAMS, LIDAR_RANGE, clipped_ranges
+from ..envs import REWARD_SOURCES
+from ..errors import ConfigError
+from ..reward.collision import COLLISION_VALUES, held_return
+from ..reward.task import task_reward
+from ..sim.drone import CONTROL_HZ, Arena, DroneSim, DroneState
+from ..sim.world import LIDAR_BEAMS, LIDAR_RANGE, clipped_ranges
+from ..training.curriculum import training_endpoints, training_fraction
 
 MAX_TILT = 0.9
 EPISODE_SECONDS = 30.0
@@ -89,12 +89,12 @@ class RewardRequest:
     rolling out."""
     held_steps: int = 1
     """For how many steps the answer is paid: 1, or under ``collision_value="floor"`` the steps
-    the episode had left when it ended in a collision (see :mod:`~cstep_bridge.collision`)."""
+    the episode had left when it ended in a collision (see :mod:`~cstep_bridge.reward.collision`)."""
     gamma: float = 1.0
     """The discount of those held steps."""
 
     def finish(self, answer, info: dict[str, Any]) -> float:
-        """The env's reward from the node's ``answer`` (a :class:`~cstep_bridge.ros_io.Reward`)
+        """The env's reward from the node's ``answer`` (a :class:`~cstep_bridge.ros.bridge.Reward`)
         for this state, held for :attr:`held_steps`; adds its task_reward, empowerment and
         reward_valid to ``info``."""
         info["task_reward"] = answer.task_reward
@@ -107,11 +107,11 @@ class EmpoweredRewardEnv(gym.Env):
     """Base of the drone and maze envs: the plain reward ``exp(−‖p − goal‖)`` or, when empowered,
     the node's empowered reward for exactly the current state.
 
-    ``bridge``: a :class:`~cstep_bridge.ros_io.RosBridge` to use (not closed by this env);
+    ``bridge``: a :class:`~cstep_bridge.ros.bridge.RosBridge` to use (not closed by this env);
     otherwise an empowered env starts its own bridge and private node, with ``node_params``
     overriding the node's parameters, on first use — except in ``reward_mode="deferred"``,
     where it asks no node, and with ``reward_source="inprocess"``, where it scores with a
-    :class:`~cstep_bridge.scoring.Scorer` of the same parameters instead (see the module
+    :class:`~cstep_bridge.reward.scoring.Scorer` of the same parameters instead (see the module
     docstring).
     """
 
@@ -131,7 +131,7 @@ class EmpoweredRewardEnv(gym.Env):
     ) -> None:
         """Checks ``safety_coefficient`` > 0, ``reward_source``, ``reward_mode`` and
         ``collision_value``, and keeps what starting a bridge or a scorer needs. ``collision_value`` and ``gamma``: what a collision is
-        worth to an empowered agent (:mod:`~cstep_bridge.collision`; ``gamma`` only discounts
+        worth to an empowered agent (:mod:`~cstep_bridge.reward.collision`; ``gamma`` only discounts
         the held floor, it should be the trainer's)."""
         super().__init__()
         if safety_coefficient <= 0:
@@ -169,14 +169,14 @@ class EmpoweredRewardEnv(gym.Env):
             "timeout": reward_timeout,
             "node_params": node_params,
         }
-        """The :class:`~cstep_bridge.ros_io.RosBridge` arguments of this env's own bridge (a
+        """The :class:`~cstep_bridge.ros.bridge.RosBridge` arguments of this env's own bridge (a
         batching wrapper starts one bridge, or in process one scorer, with them for all its
         envs)."""
 
     goal_fraction = 1.0
     """The curriculum level: drawn goals lie up to this share of the task's start–goal distance
     from the start (or, with :attr:`curriculum_moves` ``"start"``, starts from the goal; 1 = the
-    task's own); set by the training curriculum (:mod:`~cstep_bridge.curriculum`), never by
+    task's own); set by the training curriculum (:mod:`~cstep_bridge.training.curriculum`), never by
     evaluation."""
     full_task_share = 0.0
     """The share of training episodes below the last curriculum level that keep the task's own
@@ -234,17 +234,17 @@ class EmpoweredRewardEnv(gym.Env):
         if self.reward_source == "inprocess":
             raise RuntimeError("an env with reward_source='inprocess' asks no node")
         if self._bridge is None and self._own_bridge is None:
-            from .ros_io import RosBridge  # rclpy only when empowered
+            from ..ros.bridge import RosBridge  # rclpy only when empowered
 
             self._own_bridge = RosBridge(**self.bridge_args)
         return self._bridge or self._own_bridge
 
     @property
     def scorer(self):
-        """The in-process :class:`~cstep_bridge.scoring.Scorer` of this env's parameters
+        """The in-process :class:`~cstep_bridge.reward.scoring.Scorer` of this env's parameters
         (made on first use)."""
         if self._scorer is None:
-            from .scoring import bridge_scorer  # the extension only when scoring in process
+            from ..reward.scoring import bridge_scorer  # the extension only when scoring in process
 
             args = self.bridge_args
             self._scorer = bridge_scorer(args["safety_coefficient"], args["node_params"])
@@ -282,7 +282,7 @@ class EmpoweredRewardEnv(gym.Env):
             info[REWARD_REQUEST] = request
             return math.nan
         if self.reward_source == "inprocess":
-            from .scoring import score_requests
+            from ..reward.scoring import score_requests  # the extension, only when used
 
             return request.finish(score_requests(self.scorer, [request])[0], info)
         answer = self.bridge.evaluate(state, ranges, t, in_collision=request.in_collision)

@@ -5,7 +5,7 @@ argument names (``n_timesteps``, ``n_envs``, ``n_steps``, ``learning_rate`` as a
 ``lin_<value>`` for a linear decay to 0, ``normalize``, ``policy_kwargs``, ...). Two differences
 from rl-zoo, on purpose: ``policy_kwargs`` and ``normalize`` are YAML mappings rather than Python
 source to ``eval``, and four keys are ours: ``collision_value`` (what a collision is worth, see
-:mod:`~cstep_bridge.collision`), ``curriculum`` (see :mod:`~cstep_bridge.curriculum`) and
+:mod:`~cstep_bridge.reward.collision`), ``curriculum`` (see :mod:`~cstep_bridge.training.curriculum`) and
 ``validation`` (see :mod:`~cstep_bridge.selection`) and ``observation`` (the encoding the policy
 sees, see :mod:`~cstep_bridge.observation`).
 
@@ -19,9 +19,9 @@ from typing import Any
 
 import yaml
 
-from .collision import COLLISION_VALUES
-from .errors import ConfigError
-from .resources import PACKAGE
+from ..errors import ConfigError
+from ..resources import PACKAGE
+from ..reward.collision import COLLISION_VALUES
 
 HYPERPARAMS = PACKAGE / "hyperparams"
 PROTOCOLS = ("paper", "tuned")

@@ -30,7 +30,7 @@ from .acting import DEFAULT_ACTING_RULE, actor
 from .episode_cache import EpisodeCache, entry_key
 from .eval_set import DEFAULT_PATH, load
 
-log = logging.getLogger(__name__)
+logger = logging.getLogger(__name__)
 """Where this module's messages go (on stdout under the command-line tools)."""
 
 CHUNK = 10
@@ -144,7 +144,7 @@ def fly_model(
     done = cache.load(key) if cache else {}
     missing = [i for i in indices if i not in done]
     if cache and len(missing) < len(indices):
-        log.info(f"  {len(indices) - len(missing)} of {len(indices)} episodes from the cache")
+        logger.info(f"  {len(indices) - len(missing)} of {len(indices)} episodes from the cache")
     if missing:
         chunks = [missing[i : i + CHUNK] for i in range(0, len(missing), CHUNK)]
         n = len(chunks)

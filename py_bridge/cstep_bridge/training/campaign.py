@@ -51,7 +51,7 @@ from ..cli import log_to_stdout
 from ..errors import ConfigError, RayUnavailable
 from . import trainer
 
-log = logging.getLogger(__name__)
+logger = logging.getLogger(__name__)
 """Where this module's messages go (on stdout under the command-line tools)."""
 
 POLL_SECONDS = 5.0
@@ -198,7 +198,7 @@ def _set_aside_if_unresumable(directory: Path, name: str) -> None:
     if (directory / "run.json").exists() and trainer.latest_checkpoint(directory) is None:
         aside = directory.with_name(f"{name}.abandoned-{time.strftime('%Y%m%d-%H%M%S')}")
         directory.rename(aside)
-        log.info(f"{name}: no checkpoint to resume from; moved to {aside}, starting again")
+        logger.info(f"{name}: no checkpoint to resume from; moved to {aside}, starting again")
 
 
 def _record_stretch(
@@ -246,7 +246,7 @@ def prepare(plan: Plan, run: Run) -> None:
     directory = plan.root / run.directory
     _set_aside_if_unresumable(directory, run.name)
     directory.mkdir(parents=True, exist_ok=True)
-    log.info(f"{run.name}: {' '.join(plan.train_command(run)[1:])}")
+    logger.info(f"{run.name}: {' '.join(plan.train_command(run)[1:])}")
 
 
 def launch(plan: Plan, run: Run, env: dict[str, str]) -> subprocess.Popen:
@@ -318,7 +318,7 @@ def run_campaign(plan: Plan, lanes) -> int:
     pending = []
     for run in plan.schedule():
         if (plan.root / run.export / "model.zip").exists():
-            log.info(f"{run.name}: done (exported to {run.export})")
+            logger.info(f"{run.name}: done (exported to {run.export})")
         else:
             pending.append(run)
     active: dict[Run, Any] = {}
@@ -337,15 +337,15 @@ def run_campaign(plan: Plan, lanes) -> int:
                     continue
                 del active[run]
                 if ok:
-                    log.info(f"{run.name}: done, exported to {run.export}")
+                    logger.info(f"{run.name}: done, exported to {run.export}")
                 else:
                     failed += 1
-                    log.info(f"{run.name}: failed; see {run.directory / 'train.log'}")
+                    logger.info(f"{run.name}: failed; see {run.directory / 'train.log'}")
     finally:
         signal.signal(signal.SIGTERM, previous)
         for run, handle in active.items():
             lanes.stop(run, handle)
-            log.info(f"{run.name}: stopped; it resumes from its last checkpoint")
+            logger.info(f"{run.name}: stopped; it resumes from its last checkpoint")
     return failed
 
 

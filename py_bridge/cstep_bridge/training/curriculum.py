@@ -54,7 +54,7 @@ import numpy as np
 
 from ..errors import ConfigError
 
-log = logging.getLogger(__name__)
+logger = logging.getLogger(__name__)
 """Where this module's messages go (on stdout under the command-line tools)."""
 
 CLEARANCE = 0.3
@@ -219,10 +219,9 @@ def make_callback(curriculum: Curriculum, state: Path):
                 and np.mean(recent) >= curriculum.promote_at
             ):
                 self.level += 1
-                log.info(
+                logger.info(
                     f"curriculum: level {self.level} (goal fraction "
                     f"{curriculum.levels[self.level]:g}) at step {self.num_timesteps}",
-                    flush=True,
                 )
                 self._apply()
                 self.history.append([self.num_timesteps, self.level])

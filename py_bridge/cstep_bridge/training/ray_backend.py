@@ -31,7 +31,7 @@ from typing import Any, Self
 from ..errors import RayUnavailable
 from .campaign import Plan, Run, finish, launch, stop, trainer_env
 
-log = logging.getLogger(__name__)
+logger = logging.getLogger(__name__)
 """Where this module's messages go (on stdout under the command-line tools)."""
 
 CPUS_PER_RUN = 1
@@ -120,7 +120,7 @@ class RayLanes:
         try:
             return self.ray.get(ref)
         except self.ray.exceptions.RayError as err:
-            log.info(f"{run.name}: its Ray task failed: {err}")
+            logger.info(f"{run.name}: its Ray task failed: {err}")
             return False
 
     def stop(self, run: Run, ref) -> None:

@@ -58,7 +58,7 @@ from ..sim.maze_layout import LAYOUT, MazeConfig
 from .normalization import stats_path
 from .training_log import VALIDATION_CSV
 
-log = logging.getLogger(__name__)
+logger = logging.getLogger(__name__)
 """Where this module's messages go (on stdout under the command-line tools)."""
 
 DRONE_SEED = 7_331
@@ -202,11 +202,10 @@ def make_callback(env_name: str, validation: Validation, out: Path):
                 w.writerow(csv_row(self.num_timesteps, result, improved))
             for k, v in result.items():
                 self.logger.record(f"validation/{k}", v)
-            log.info(
+            logger.info(
                 f"validation at {self.num_timesteps}: success {result['success_rate']:.0%}, "
                 f"collisions {result['collision_rate']:.0%}, mean length "
                 f"{result['mean_length']:.0f} steps{' (best so far)' if improved else ''}",
-                flush=True,
             )
 
     return BestOnValidation()
@@ -273,7 +272,9 @@ def reselect(
     episodes = episodes or validation.episodes
     found = validated_checkpoints(run, start)
     env_name, n = settings["env"], len(found)
-    log.info(f"{run}: {n} checkpoints, {episodes} validation episodes each, acting by its {acting}")
+    logger.info(
+        f"{run}: {n} checkpoints, {episodes} validation episodes each, acting by its {acting}"
+    )
     best, best_key, rows = None, None, []
     with ProcessPoolExecutor(min(jobs, n), mp_context=get_context("spawn")) as pool:
         paths = [p for _, p in found]
@@ -284,7 +285,7 @@ def reselect(
             if improved:
                 best, best_key = path, key
             rows.append(csv_row(steps, result, improved))
-            log.info(
+            logger.info(
                 f"  {steps}: success {result['success_rate']:.0%}, collisions "
                 f"{result['collision_rate']:.0%}{' (best so far)' if improved else ''}"
             )
@@ -294,7 +295,7 @@ def reselect(
     shutil.copyfile(best, chosen)
     if stats_path(best).exists():
         shutil.copyfile(stats_path(best), stats_path(chosen))
-    log.info(f"best: {best.name} -> {chosen}")
+    logger.info(f"best: {best.name} -> {chosen}")
     return chosen
 
 

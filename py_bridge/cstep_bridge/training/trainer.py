@@ -63,7 +63,7 @@ from . import curriculum, noise_cap, protocol, selection
 from .batched_reward import make_batched_vec_env
 from .normalization import stats_path
 
-log = logging.getLogger(__name__)
+logger = logging.getLogger(__name__)
 """Where this module's messages go (on stdout under the command-line tools)."""
 
 # Episode fields the Monitor writes and the summaries read.
@@ -221,7 +221,7 @@ def execution_defaults(args: argparse.Namespace, settings: dict[str, Any]) -> No
             )
         args.n_envs = int(stored)
     elif stored is not None and args.n_envs != stored:
-        log.info(f"--n-envs {args.n_envs}: the run began with {stored} envs per update")
+        logger.info(f"--n-envs {args.n_envs}: the run began with {stored} envs per update")
     if args.vec_env is None:
         args.vec_env = "subproc" if args.n_envs > 1 else "dummy"
 
@@ -230,7 +230,7 @@ def _whole_zip(path: Path) -> bool:
     """Whether ``path`` is a readable zip; says so when it is not."""
     if zipfile.is_zipfile(path):
         return True
-    log.warning(f"{path}: not a whole zip file (a save cut short?), passed over")
+    logger.warning(f"{path}: not a whole zip file (a save cut short?), passed over")
     return False
 
 

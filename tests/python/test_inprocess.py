@@ -20,7 +20,7 @@ from cstep_bridge.sim.world import (
     LIDAR_RANGE_MIN,
 )
 from cstep_bridge.training.batched_reward import make_batched_vec_env
-from cstep_bridge.training.trainer import load_settings
+from cstep_bridge.training.config import RunConfig
 from cstep_msgs.srv import EvaluateBatch
 from geometry_msgs.msg import Point
 from module_cli import run
@@ -291,4 +291,4 @@ def test_inprocess_training_end_to_end_and_old_runs_resume_over_the_node(tmp_pat
     # A run.json from before reward sources ran over the node, and resumes so.
     del stored["reward_source"]
     (out / "run.json").write_text(json.dumps(stored))
-    assert load_settings(out)["reward_source"] == "node"
+    assert RunConfig.load(out).reward_source == "node"

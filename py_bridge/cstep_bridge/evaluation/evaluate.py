@@ -49,6 +49,7 @@ from ..errors import RayUnavailable
 from ..sim.drone import Arena
 from ..sim.maze_layout import LAYOUT
 from ..training import training_log
+from ..training.config import RunConfig
 from ..training.ray_backend import RayPool
 from . import comparison, metrics, paper_results
 from .acting import ACTING_RULES, DEFAULT_ACTING_RULE
@@ -84,16 +85,17 @@ def find_agent(path: Path, label: str | None) -> Agent:
         (d / "run.json" for d in (model.parent, model.parent.parent) if (d / "run.json").exists()),
         None,
     )
-    settings = json.loads(run.read_text()) if run else {}
+    config = RunConfig.load(run.parent) if run else None
 
     data, _, _ = load_from_zip_file(model, device="cpu", load_data=True)
-    agent = settings.get("agent", model.stem)
+    agent = config.agent if config else model.stem
+    c = config.safety_coefficient if config else None
     if label is None:
-        label = f"empowered c={settings['c']:g}" if agent == "empowered" else agent
+        label = f"empowered c={c:g}" if agent == "empowered" else agent
     steps = int(data.get("num_timesteps", 0))
-    env = settings.get("env", "")
-    paper = paper_results.drone_agent(agent, settings.get("c")) if env == "drone" else None
-    return Agent(label, model, env, steps, settings.get("seed"), paper)
+    env = config.env if config else ""
+    paper = paper_results.drone_agent(agent, c) if env == "drone" else None
+    return Agent(label, model, env, steps, config.seed if config else None, paper)
 
 
 def history(agent: Agent) -> tuple[np.ndarray | None, np.ndarray | None]:

@@ -50,6 +50,7 @@ import yaml
 from ..cli import log_to_stdout
 from ..errors import ConfigError, RayUnavailable
 from . import trainer
+from .config import RunConfig
 
 logger = logging.getLogger(__name__)
 """Where this module's messages go (on stdout under the command-line tools)."""
@@ -73,10 +74,11 @@ class Run:
         return f"{self.agent}-s{self.seed}"
 
     def agent_args(self) -> list[str]:
-        """The trainer's ``--agent`` (and ``--c``) arguments of this run's agent."""
+        """The trainer's ``--agent`` (and ``--safety-coefficient``) arguments of this run's
+        agent."""
         if self.agent == "unempowered":
             return ["--agent", "unempowered"]
-        return ["--agent", "empowered", "--c", self.agent[1:]]
+        return ["--agent", "empowered", "--safety-coefficient", self.agent[1:]]
 
 
 @dataclass
@@ -133,23 +135,23 @@ class Plan:
         plan.check_training_settings(path)
         return plan
 
-    def training_settings(self, run: Run) -> tuple[argparse.Namespace, dict[str, Any]]:
+    def training_settings(self, run: Run) -> tuple[argparse.Namespace, RunConfig]:
         """The trainer's arguments and the settings ``run`` starts with, derived as the trainer
         derives them (the protocol, the plan's arguments, the protocol's envs and steps where the
         plan names none). Raises SystemExit or ValueError where the trainer would refuse them."""
         args = trainer.parse_args(self.train_command(run, resume=False)[3:])
-        settings = trainer.run_settings(args)
-        trainer.execution_defaults(args, settings)
-        return args, settings
+        config = trainer.run_settings(args)
+        trainer.execution_defaults(args, config)
+        return args, config
 
     def check_training_settings(self, path: Path) -> None:
         """Raises ValueError unless the trainer accepts the plan's arguments and its runs
         validate at least once (else no best-validation model to export)."""
         try:
-            _, settings = self.training_settings(self.schedule()[0])
+            _, config = self.training_settings(self.schedule()[0])
         except (SystemExit, ValueError) as err:
             raise ConfigError(f"{path}: the trainer refuses the plan's arguments ({err})") from err
-        validation = settings.get("validation")
+        validation = config.validation
         if not validation or validation["every"] > self.timesteps:
             raise ConfigError(
                 f"{path}: the runs never validate (validation {validation}, {self.timesteps} "

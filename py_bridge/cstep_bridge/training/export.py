@@ -16,13 +16,13 @@ SB3's metadata and gives the model a fresh optimiser, so ``PPO.load`` and
 from __future__ import annotations
 
 import argparse
-import json
 import shutil
 from pathlib import Path
 
 from stable_baselines3 import PPO
 
 from . import training_log
+from .config import RunConfig
 from .normalization import stats_path
 
 MAX_BYTES = 5_000_000
@@ -52,9 +52,9 @@ def export(run: Path, which: str, out: Path) -> Path:
     partial = out.with_name(out.name + ".partial")
     shutil.rmtree(partial, ignore_errors=True)
     partial.mkdir(parents=True)
-    settings = json.loads((run / "run.json").read_text())
-    settings["exported_from"] = {"run": str(run), "model": src.name, "steps": model.num_timesteps}
-    (partial / "run.json").write_text(json.dumps(settings, indent=2) + "\n")
+    config = RunConfig.load(run)
+    config.exported_from = {"run": str(run), "model": src.name, "steps": model.num_timesteps}
+    config.save(partial)
     model.save(partial / "model.zip")
     size = (partial / "model.zip").stat().st_size
     if size > MAX_BYTES:

@@ -35,7 +35,6 @@ from __future__ import annotations
 
 import argparse
 import csv
-import json
 import logging
 import shutil
 from concurrent.futures import ProcessPoolExecutor
@@ -55,6 +54,7 @@ from ..evaluation.acting import ACTING_RULES, DEFAULT_ACTING_RULE, check_rule
 from ..evaluation.eval_set import generate
 from ..evaluation.flights import fly_episodes, fly_saved
 from ..sim.maze_layout import LAYOUT, MazeConfig
+from .config import RunConfig
 from .normalization import stats_path
 from .training_log import VALIDATION_CSV
 
@@ -263,15 +263,15 @@ def reselect(
     configurations (None: as many as the run validated on) acting by ``acting`` (None: the run's
     own rule); writes ``validation-<name>.csv`` and ``best_model-<name>.zip`` (see the module
     docstring and :func:`selection_name`) and returns the latter."""
-    settings = json.loads((run / "run.json").read_text())
-    validation = Validation.from_settings(settings.get("validation"))
+    config = RunConfig.load(run)
+    validation = Validation.from_settings(config.validation)
     if validation is None:
         raise SystemExit(f"{run}: its run.json has no validation settings")
     acting = acting or validation.action
     name = selection_name(acting, episodes, start)
     episodes = episodes or validation.episodes
     found = validated_checkpoints(run, start)
-    env_name, n = settings["env"], len(found)
+    env_name, n = config.env, len(found)
     logger.info(
         f"{run}: {n} checkpoints, {episodes} validation episodes each, acting by its {acting}"
     )

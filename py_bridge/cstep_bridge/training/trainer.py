@@ -18,7 +18,8 @@ topic`` (node only) each environment starts a node of its own instead.
 
 The run directory ``--out`` holds:
 
-- ``run.json``: the settings, written when the run starts, the envs per update among them;
+- ``run.json``: the run's :class:`~cstep_bridge.training.config.RunConfig`, written when the run
+  starts, the envs per update among them;
   ``--resume`` continues with them (only ``--timesteps`` and how it runs may change; ``--n-envs``
   too, said aloud, as it changes the batch of each update).
 - ``checkpoints/ppo_<steps>_steps.zip`` every ``--checkpoint-every`` steps, and ``model.zip`` at the end
@@ -36,7 +37,7 @@ The run directory ``--out`` holds:
 from __future__ import annotations
 
 import argparse
-import json
+import dataclasses
 import logging
 import re
 import time
@@ -61,6 +62,7 @@ from ..observation import normalizer_class
 from ..observation import policy_kwargs as encoding_kwargs
 from . import curriculum, noise_cap, protocol, selection
 from .batched_reward import make_batched_vec_env
+from .config import RUN_JSON, RunConfig
 from .normalization import stats_path
 
 logger = logging.getLogger(__name__)
@@ -92,7 +94,13 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     )
     ap.add_argument("--env", choices=ENV_NAMES, default="drone")
     ap.add_argument("--agent", choices=("unempowered", "empowered"), default="empowered")
-    ap.add_argument("--c", type=float, default=1.0, help="safety coefficient c > 0 (empowered)")
+    ap.add_argument(
+        "--safety-coefficient",
+        "--c",
+        type=float,
+        default=1.0,
+        help="the empowered reward's safety coefficient c > 0",
+    )
     ap.add_argument(
         "--protocol",
         choices=protocol.PROTOCOLS,
@@ -146,7 +154,14 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     args = ap.parse_args(argv)
     problems = [
         f"--{name.replace('_', '-')} must be > 0"
-        for name in ("c", "timesteps", "n_envs", "checkpoint_every", "n_steps", "batch_size")
+        for name in (
+            "safety_coefficient",
+            "timesteps",
+            "n_envs",
+            "checkpoint_every",
+            "n_steps",
+            "batch_size",
+        )
         if getattr(args, name) is not None and getattr(args, name) <= 0
     ]
     try:
@@ -170,9 +185,9 @@ def _layers(text: str) -> list[int]:
     return layers
 
 
-def run_settings(args: argparse.Namespace) -> dict[str, Any]:
-    """The settings stored in run.json (those that define the run, not how it is executed): the
-    protocol's section for the env, with ``--hyperparams`` and the single options applied."""
+def run_settings(args: argparse.Namespace) -> RunConfig:
+    """The run's configuration (what defines the run, not how it is executed): the protocol's
+    section for the env, with ``--hyperparams`` and the single options applied."""
     hyper = protocol.load(args.protocol, args.env)
     for key, value in args.overrides.items():
         if isinstance(value, dict) and isinstance(hyper.get(key), dict):
@@ -183,35 +198,33 @@ def run_settings(args: argparse.Namespace) -> dict[str, Any]:
         if getattr(args, option) is not None:
             settings[name] = getattr(args, option)
     protocol.check(settings)
-
+    # Each raises ConfigError naming what is wrong.
     check_observation(settings["observation"], args.env)
-    curriculum.Curriculum.from_settings(
-        settings["curriculum"]
-    )  # raises ValueError naming what is wrong
+    curriculum.Curriculum.from_settings(settings["curriculum"])
     selection.Validation.from_settings(settings["validation"])
     noise_cap.NoiseCap.from_settings(settings["noise_cap"])
-    return {
-        "env": args.env,
-        "agent": args.agent,
-        "c": args.c,
-        "seed": args.seed,
-        "protocol": args.protocol,
+    return RunConfig(
+        env=args.env,
+        agent=args.agent,
+        safety_coefficient=args.safety_coefficient,
+        seed=args.seed,
+        protocol=args.protocol,
         **settings,
-        "n_envs": args.n_envs if args.n_envs is not None else int(hyper["n_envs"]),
-        "reward_mode": args.reward_mode,
-        "reward_source": args.reward_source or "inprocess",
-        "checkpoint_every": args.checkpoint_every,
-    }
+        n_envs=args.n_envs if args.n_envs is not None else int(hyper["n_envs"]),
+        reward_mode=args.reward_mode,
+        reward_source=args.reward_source or "inprocess",
+        checkpoint_every=args.checkpoint_every,
+    )
 
 
-def execution_defaults(args: argparse.Namespace, settings: dict[str, Any]) -> None:
-    """Fills ``--timesteps`` from the run's protocol and ``--n-envs`` from its settings where not
-    given; a run.json from before they held ``n_envs`` needs ``--n-envs`` (the protocol file may
-    have moved on since the run began)."""
-    hyper = protocol.load(settings.get("protocol", "paper"), settings["env"])
+def execution_defaults(args: argparse.Namespace, config: RunConfig) -> None:
+    """Fills ``--timesteps`` from the run's protocol and ``--n-envs`` from its configuration where
+    not given; a run.json from before they held ``n_envs`` needs ``--n-envs`` (the protocol file
+    may have moved on since the run began)."""
+    hyper = protocol.load(config.protocol, config.env)
     if args.timesteps is None:
         args.timesteps = int(hyper["n_timesteps"])
-    stored = settings.get("n_envs")
+    stored = config.n_envs
     if args.n_envs is None:
         if stored is None:
             raise SystemExit(
@@ -250,26 +263,26 @@ def latest_checkpoint(out: Path) -> Path | None:
     return best
 
 
-def env_factory(settings: dict[str, Any]):
+def env_factory(config: RunConfig):
     """A picklable constructor of one environment for the run (called in each worker process)."""
-    empowered = settings["agent"] == "empowered"
+    empowered = config.empowered
     kwargs: dict[str, Any] = {}
     if empowered:
-        kwargs["reward_mode"] = settings["reward_mode"]
-        kwargs["reward_source"] = settings["reward_source"]
-        kwargs["collision_value"] = settings["collision_value"]
-        kwargs["gamma"] = settings["gamma"]
+        kwargs["reward_mode"] = config.reward_mode
+        kwargs["reward_source"] = config.reward_source
+        kwargs["collision_value"] = config.collision_value
+        kwargs["gamma"] = config.gamma
 
     def build():
         return make_env(
-            settings["env"], empowered=empowered, safety_coefficient=settings["c"], **kwargs
+            config.env, empowered=empowered, safety_coefficient=config.safety_coefficient, **kwargs
         )
 
     return build
 
 
 def training_vec_env(
-    settings: dict[str, Any],
+    config: RunConfig,
     n_envs: int,
     vec_env: str,
     monitor_dir: Path | None,
@@ -281,28 +294,28 @@ def training_vec_env(
     and one call per vector step (:mod:`~cstep_bridge.training.batched_reward`); otherwise each env is
     SB3's usual Monitor-wrapped one."""
     vec_env_cls = SubprocVecEnv if vec_env == "subproc" else DummyVecEnv
-    if settings["agent"] == "empowered" and settings["reward_mode"] == "service":
+    if config.empowered and config.reward_mode == "service":
         return make_batched_vec_env(
-            env_factory({**settings, "reward_mode": "deferred"}),
+            env_factory(dataclasses.replace(config, reward_mode="deferred")),
             n_envs,
-            seed=settings["seed"],
+            seed=config.seed,
             vec_env_cls=vec_env_cls,
             monitor_dir=monitor_dir,
             info_keywords=INFO_KEYWORDS,
             override_existing=override_existing,
         )
     return make_vec_env(
-        env_factory(settings),
+        env_factory(config),
         n_envs=n_envs,
-        seed=settings["seed"],
+        seed=config.seed,
         monitor_dir=None if monitor_dir is None else str(monitor_dir),
         monitor_kwargs={"info_keywords": INFO_KEYWORDS, "override_existing": override_existing},
         vec_env_cls=vec_env_cls,
     )
 
 
-def _callbacks(out: Path, settings: dict[str, Any]):
-    checkpoint_every = settings["checkpoint_every"]
+def _callbacks(out: Path, config: RunConfig):
+    checkpoint_every = config.checkpoint_every
 
     class Checkpoints(BaseCallback):
         """Saves ``checkpoints/ppo_<steps>_steps.zip`` (and the VecNormalize statistics beside
@@ -379,40 +392,40 @@ def _callbacks(out: Path, settings: dict[str, Any]):
             print("  ".join(f"{k} {v}" for k, v in fields.items()), flush=True)
 
     callbacks = [Checkpoints(), CStepLog()]
-    plan = curriculum.Curriculum.from_settings(settings["curriculum"])
+    plan = curriculum.Curriculum.from_settings(config.curriculum)
     if plan is not None:
         callbacks.append(curriculum.make_callback(plan, out / "curriculum.json"))
-    cap = noise_cap.NoiseCap.from_settings(settings.get("noise_cap"))  # absent in older runs
+    cap = noise_cap.NoiseCap.from_settings(config.noise_cap)
     if cap is not None:
         callbacks.append(noise_cap.make_callback(cap))
-    validation = selection.Validation.from_settings(settings["validation"])
+    validation = selection.Validation.from_settings(config.validation)
     if validation is not None:
-        callbacks.append(selection.make_callback(settings["env"], validation, out))
+        callbacks.append(selection.make_callback(config.env, validation, out))
     return CallbackList(callbacks)
 
 
-def _policy_kwargs(settings: dict[str, Any]) -> dict[str, Any]:
-    net = settings["net"]
+def _policy_kwargs(config: RunConfig) -> dict[str, Any]:
+    net = config.net
     return {
-        **encoding_kwargs(settings.get("observation", "raw")),  # absent in older runs
+        **encoding_kwargs(config.observation),
         "net_arch": {"pi": net, "vf": net},
-        "activation_fn": {"tanh": torch.nn.Tanh, "relu": torch.nn.ReLU}[settings["activation"]],
-        "log_std_init": settings["log_std_init"],
-        "ortho_init": settings["ortho_init"],
-        # gSDE's tanh squashing and its bounded std; absent from runs started before them
-        "squash_output": settings.get("squash_output", False),
-        "use_expln": settings.get("use_expln", False),
+        "activation_fn": {"tanh": torch.nn.Tanh, "relu": torch.nn.ReLU}[config.activation],
+        "log_std_init": config.log_std_init,
+        "ortho_init": config.ortho_init,
+        # gSDE's tanh squashing and its bounded std
+        "squash_output": config.squash_output,
+        "use_expln": config.use_expln,
     }
 
 
-def _learning_rate(settings: dict[str, Any]):
-    lr = settings["learning_rate"]
-    if settings["lr_schedule"] == "linear":
+def _learning_rate(config: RunConfig):
+    lr = config.learning_rate
+    if config.lr_schedule == "linear":
         return LinearSchedule(lr, 0.0, 1.0)
     return lr
 
 
-def learn_sde_features(model, settings: dict[str, Any]):
+def learn_sde_features(model, config: RunConfig):
     """``model`` with gSDE's noise features trained when the run's ``sde_learn_features`` says so:
     the policy gradient then reaches the policy's latent through the noise's state-dependent std
     too (SB3 otherwise detaches the latent there and tunes only the std's weights), so the
@@ -420,59 +433,48 @@ def learn_sde_features(model, settings: dict[str, Any]):
     its mean. SB3's ActorCriticPolicy fixes gSDE's ``learn_features`` to False in its constructor
     and reads it only when it builds each distribution, so it is set here, after building or
     loading, and not saved with the model: a resumed run sets it again."""
-    if settings.get("sde_learn_features"):
+    if config.sde_learn_features:
         model.policy.action_dist.learn_features = True
     return model
 
 
-def build_model(settings: dict[str, Any], venv, device: str = "cpu", tensorboard_log=None):
+def build_model(config: RunConfig, venv, device: str = "cpu", tensorboard_log=None):
     """A new PPO model with a run's settings on ``venv``."""
     model = PPO(
         "MlpPolicy",
         venv,
-        learning_rate=_learning_rate(settings),
-        n_steps=settings["n_steps"],
-        batch_size=settings["batch_size"],
-        n_epochs=settings["n_epochs"],
-        gamma=settings["gamma"],
-        gae_lambda=settings["gae_lambda"],
-        clip_range=settings["clip_range"],
-        ent_coef=settings["ent_coef"],
-        max_grad_norm=settings["max_grad_norm"],
-        target_kl=settings.get("target_kl"),
-        use_sde=settings["use_sde"],
-        sde_sample_freq=settings["sde_sample_freq"],
-        policy_kwargs=_policy_kwargs(settings),
+        learning_rate=_learning_rate(config),
+        n_steps=config.n_steps,
+        batch_size=config.batch_size,
+        n_epochs=config.n_epochs,
+        gamma=config.gamma,
+        gae_lambda=config.gae_lambda,
+        clip_range=config.clip_range,
+        ent_coef=config.ent_coef,
+        max_grad_norm=config.max_grad_norm,
+        target_kl=config.target_kl,
+        use_sde=config.use_sde,
+        sde_sample_freq=config.sde_sample_freq,
+        policy_kwargs=_policy_kwargs(config),
         tensorboard_log=None if tensorboard_log is None else str(tensorboard_log),
-        seed=settings["seed"],
+        seed=config.seed,
         device=device,
         verbose=0,
     )
-    return learn_sde_features(model, settings)
-
-
-def load_settings(out: Path) -> dict[str, Any]:
-    """The settings of the run in ``out``; a run.json from before protocols existed reads as
-    the paper's protocol with its own entries, and one from before reward sources as
-    ``reward_source: node`` (how it ran)."""
-    stored = {"reward_source": "node", **json.loads((out / "run.json").read_text())}
-    if "protocol" in stored:
-        return stored
-    base = protocol.settings(protocol.load("paper", stored["env"]))
-    return {"protocol": "paper", **base, **stored}
+    return learn_sde_features(model, config)
 
 
 def train(args: argparse.Namespace) -> Path:
     """Runs (or resumes) the training described by ``args``; returns the final model's path."""
     out: Path = args.out
-    settings_path = out / "run.json"
+    settings_path = out / RUN_JSON
     resume_from = None
     if args.resume:
         if not settings_path.exists():
             raise SystemExit(f"--resume: {out} holds no run (no run.json); start one without it")
-        settings = load_settings(out)
+        config = RunConfig.load(out)
         if args.reward_source is not None:  # how it runs, not what it learns: same rewards
-            settings["reward_source"] = args.reward_source
+            config.reward_source = args.reward_source
         resume_from = latest_checkpoint(out)
         if resume_from is None:
             raise SystemExit(f"--resume: {out} has no checkpoint or model.zip to continue from")
@@ -482,49 +484,49 @@ def train(args: argparse.Namespace) -> Path:
                 f"{out} already holds a run: pass --resume to continue it, or choose another --out"
             )
         try:
-            settings = run_settings(args)
+            config = run_settings(args)
         except ValueError as err:
             raise SystemExit(f"settings: {err}") from err
         out.mkdir(parents=True, exist_ok=True)
-        settings_path.write_text(json.dumps(settings, indent=2) + "\n")
-    execution_defaults(args, settings)
+        config.save(out)
+    execution_defaults(args, config)
 
     (out / "checkpoints").mkdir(exist_ok=True)
     torch.set_num_threads(args.torch_threads)
     vec_env = training_vec_env(
-        settings, args.n_envs, args.vec_env, out / "monitor", override_existing=not args.resume
+        config, args.n_envs, args.vec_env, out / "monitor", override_existing=not args.resume
     )
-    if settings["norm_obs"] or settings["norm_reward"]:
+    if config.norm_obs or config.norm_reward:
         stats = stats_path(resume_from) if resume_from is not None else None
         if stats is not None and stats.exists():
             vec_env = VecNormalize.load(str(stats), vec_env)
         else:
-            vec_env = normalizer_class(settings.get("observation", "raw"))(
+            vec_env = normalizer_class(config.observation)(
                 vec_env,
-                norm_obs=settings["norm_obs"],
-                norm_reward=settings["norm_reward"],
-                gamma=settings["gamma"],
+                norm_obs=config.norm_obs,
+                norm_reward=config.norm_reward,
+                gamma=config.gamma,
             )
     try:
         if resume_from is not None:
             model = learn_sde_features(
-                PPO.load(resume_from, env=vec_env, device=args.device), settings
+                PPO.load(resume_from, env=vec_env, device=args.device), config
             )
             print(f"resuming {out} from {resume_from.name} at step {model.num_timesteps}")
         else:
-            model = build_model(settings, vec_env, args.device, out / "tb")
+            model = build_model(config, vec_env, args.device, out / "tb")
         remaining = args.timesteps - model.num_timesteps
-        label = f"{settings['env']} {settings['agent']}"
-        if settings["agent"] == "empowered":
-            label += f" c={settings['c']}"
+        label = f"{config.env} {config.agent}"
+        if config.empowered:
+            label += f" c={config.safety_coefficient}"
         print(
-            f"training {label} ({settings['protocol']} protocol): {remaining} steps to "
+            f"training {label} ({config.protocol} protocol): {remaining} steps to "
             f"{args.timesteps}, {args.n_envs} env(s)"
         )
         if remaining > 0:
             model.learn(
                 total_timesteps=remaining,
-                callback=_callbacks(out, settings),
+                callback=_callbacks(out, config),
                 tb_log_name="ppo",
                 reset_num_timesteps=False,
                 progress_bar=args.progress,

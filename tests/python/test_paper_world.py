@@ -13,7 +13,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 from cstep_bridge.reward.task import task_reward
-from cstep_bridge.sim.drone import Arena, world
+from cstep_bridge.sim import world
+from cstep_bridge.sim.drone import Arena
 from cstep_bridge.sim.paper_world import PAPER_WORLD
 
 REPO = Path(__file__).resolve().parents[2]

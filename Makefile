@@ -152,7 +152,7 @@ $(SCORING_STAMP): $(PY_STAMP) $(SCORING_INPUTS) Makefile
 	@echo "==> cstep_scoring: building crates/cstep-py with maturin and installing it into $(VENV)/"
 	$(VENV_ENV) VIRTUAL_ENV=$(VENV_ABS) $(VENV)/bin/maturin develop --release --quiet \
 		--manifest-path crates/cstep-py/Cargo.toml
-	@$(VENV_ENV) $(VPY) -c "from cstep_bridge.scoring import Scorer; Scorer()" \
+	@$(VENV_ENV) $(VPY) -c "from cstep_bridge.reward.scoring import Scorer; Scorer()" \
 		|| { echo "cstep_scoring was built but does not import"; exit 1; }
 	@touch $@
 

@@ -21,7 +21,7 @@ import sys
 import tempfile
 import time
 
-from cstep_bridge import train
+from cstep_bridge.training import trainer as train
 
 AGENTS = ("unempowered", "empowered")
 
@@ -39,12 +39,12 @@ def steps_per_second(agent: str, args: argparse.Namespace, seed: int) -> float:
     torch.set_num_threads(1)  # the trainer's --torch-threads default
     venv = train.training_vec_env(settings, args.n_envs, args.vec_env, monitor_dir=None)
     try:
-        if settings["norm_obs"] or settings["norm_reward"]:
+        if settings.norm_obs or settings.norm_reward:
             venv = VecNormalize(
                 venv,
-                norm_obs=settings["norm_obs"],
-                norm_reward=settings["norm_reward"],
-                gamma=settings["gamma"],
+                norm_obs=settings.norm_obs,
+                norm_reward=settings.norm_reward,
+                gamma=settings.gamma,
             )
         model = train.build_model(settings, venv)
         model.learn(args.warmup)

@@ -10,7 +10,10 @@ last metre as wide as the first ones. The rest of the observation is normalised 
 The encoding is a layer of the policy (:class:`GoalEncoding`, a features extractor without
 weights, saved in the model file), and the normalisation that spares the goal
 (:class:`PartialVecNormalize`) is pickled beside the model like SB3's own, so flying a model needs
-nothing but the environment's raw observation and the model's files.
+nothing but the environment's raw observation and the model's files. Both pickles name this
+module's path, ``cstep_bridge.observation``: committed models load only while the two classes
+stay here, which is why this training module sits beside the subpackages rather than in
+:mod:`cstep_bridge.training`.
 """
 
 from __future__ import annotations
@@ -22,6 +25,8 @@ import numpy as np
 import torch
 from stable_baselines3.common.torch_layers import BaseFeaturesExtractor
 from stable_baselines3.common.vec_env import VecEnv, VecNormalize
+
+from .errors import ConfigError
 
 OBSERVATIONS = ("raw", "goal")
 """The encodings a protocol's ``observation`` key may name."""
@@ -71,9 +76,9 @@ class PartialVecNormalize(VecNormalize):
 def check(observation: str, env: str) -> None:
     """Raises ValueError when ``observation`` is no encoding, or one ``env`` does not have."""
     if observation not in OBSERVATIONS:
-        raise ValueError(f"observation must be one of {OBSERVATIONS}, not {observation!r}")
+        raise ConfigError(f"observation must be one of {OBSERVATIONS}, not {observation!r}")
     if observation != "raw" and env != "drone":
-        raise ValueError(f"observation {observation!r} is the drone's; the {env} has only 'raw'")
+        raise ConfigError(f"observation {observation!r} is the drone's; the {env} has only 'raw'")
 
 
 def policy_kwargs(observation: str) -> dict[str, Any]:

@@ -24,6 +24,8 @@ import os
 import shutil
 from pathlib import Path
 
+from .errors import ResourceNotFound
+
 PACKAGE = Path(__file__).resolve().parent
 """This package's directory: its own data (``data/``, ``hyperparams/``) lies here."""
 
@@ -45,10 +47,6 @@ ROOT_VAR = "CSTEP_ROOT"
 
 AMENT_PACKAGE = "cstep"
 """The node's package name in the ament index (``share/ament_index/resource_index/packages``)."""
-
-
-class ResourceNotFound(FileNotFoundError):
-    """A file cstep_bridge needs is in none of the places it looks; the message lists them."""
 
 
 def _ament_place(*parts: str) -> tuple[str, Path | None]:

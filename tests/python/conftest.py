@@ -29,7 +29,7 @@ REPO = HERE.parent.parent
 # py_bridge/ (the cstep_bridge package) straight from this checkout, whatever checkout the venv's
 # editable install points at (worktrees may share one venv); test_package.py checks the install.
 sys.path.insert(0, str(REPO / "py_bridge"))
-from cstep_bridge.ros_io import PRIVATE_DOMAINS
+from cstep_bridge.ros.bridge import PRIVATE_DOMAINS
 
 # Run as a background job (`make test &`), the tests start with SIGINT ignored (the shell's rule
 # for `&`), a disposition every process they start inherits and keeps: the Ctrl-C a test sends a

@@ -1,13 +1,14 @@
-"""How a trained policy acts in validation and evaluation (``cstep_bridge.acting``), against real
+"""How a trained policy acts in validation and evaluation (``cstep_bridge.evaluation.acting``), against real
 stable-baselines3 policies built by the trainer for real PyBullet envs: the expected action is the
 mean of the actions the policy itself samples, and is not its mode."""
 
 import numpy as np
 import pytest
 import torch
-from cstep_bridge import acting, selection
 from cstep_bridge.envs import make_env
-from cstep_bridge.train import build_model, parse_args, run_settings
+from cstep_bridge.evaluation import acting
+from cstep_bridge.training import selection
+from cstep_bridge.training.trainer import build_model, parse_args, run_settings
 from stable_baselines3.common.env_util import make_vec_env
 
 SAMPLES = 40_000

@@ -11,7 +11,7 @@ from pathlib import Path
 
 import pytest
 from conftest import DISCOVERY_TIMEOUT_S, REPO, wait_until
-from cstep_bridge.bag import (
+from cstep_bridge.ros.bag import (
     INPUTS,
     OUTPUTS,
     BagError,

@@ -1,4 +1,4 @@
-"""cstep_bridge.batched_reward: N deferred envs, one `cstep node`, one EvaluateBatch call per
+"""cstep_bridge.training.batched_reward: N deferred envs, one `cstep node`, one EvaluateBatch call per
 vector step — the same rewards as envs with nodes of their own (real PyBullet, real rclpy, real
 DDS on this test's domain)."""
 
@@ -6,9 +6,9 @@ import math
 
 import numpy as np
 import pytest
-from cstep_bridge.batched_reward import BatchedReward, make_batched_vec_env
-from cstep_bridge.env import REWARD_REQUEST
 from cstep_bridge.envs import make_env
+from cstep_bridge.envs.drone import REWARD_REQUEST
+from cstep_bridge.training.batched_reward import BatchedReward, make_batched_vec_env
 from stable_baselines3.common.vec_env import DummyVecEnv, SubprocVecEnv
 
 SEED = 5

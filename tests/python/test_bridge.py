@@ -14,9 +14,11 @@ import numpy as np
 import pybullet as p
 import pytest
 from conftest import REPO
-from cstep_bridge.env import CStepDroneEnv
-from cstep_bridge.ros_io import CStepNode, RewardTimeout, RosBridge, odometry_msg, scan_msg
-from cstep_bridge.sim import LIDAR_BEAMS, Arena, DroneSim
+from cstep_bridge.envs.drone import CStepDroneEnv
+from cstep_bridge.errors import RewardTimeout
+from cstep_bridge.ros.bridge import CStepNode, RosBridge, odometry_msg, scan_msg
+from cstep_bridge.sim.drone import Arena, DroneSim
+from cstep_bridge.sim.world import LIDAR_BEAMS
 from gymnasium.utils.env_checker import check_env
 from node_rig import cstep_eval
 
@@ -324,7 +326,7 @@ def test_a_killed_trainer_leaves_no_node_behind(ros_domain):
     trainer = (
         "import os, signal, sys\n"
         f"sys.path.insert(0, {str(REPO / 'py_bridge')!r})\n"
-        "from cstep_bridge.ros_io import RosBridge\n"
+        "from cstep_bridge.ros.bridge import RosBridge\n"
         f"bridge = RosBridge(domain_id={ros_domain})\n"
         "print(bridge.cstep.proc.pid, flush=True)\n"
         "os.kill(os.getpid(), signal.SIGKILL)  # no close, no atexit\n"

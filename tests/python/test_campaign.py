@@ -10,10 +10,12 @@ from pathlib import Path
 import pytest
 import yaml
 from conftest import REPO
-from cstep_bridge.campaign import Plan
-from cstep_bridge.campaign import main as campaign_main
-from cstep_bridge.curriculum import Curriculum
-from cstep_bridge.ray_backend import RayPool, RayUnavailable
+from cstep_bridge.errors import RayUnavailable
+from cstep_bridge.training.campaign import Plan
+from cstep_bridge.training.campaign import main as campaign_main
+from cstep_bridge.training.config import RENAMED, RunConfig
+from cstep_bridge.training.curriculum import Curriculum
+from cstep_bridge.training.ray_backend import RayPool
 from module_cli import run
 
 TINY = [
@@ -49,7 +51,7 @@ def test_a_campaign_trains_exports_and_then_finds_every_run_done(tmp_path):
         settings = json.loads((tmp_path / "models" / name / "run.json").read_text())
         assert settings["agent"] == agent and settings["seed"] == 4 and settings["env"] == "maze"
         if c is not None:
-            assert settings["c"] == c
+            assert settings["safety_coefficient"] == c
         assert settings["exported_from"]["model"] == "best_model.zip"
         record = json.loads((tmp_path / "runs" / name / "campaign.json").read_text())
         assert [s["exit"] for s in record["stretches"]] == [0] and record["hours"] > 0
@@ -137,14 +139,17 @@ def test_a_committed_plan_still_trains_what_its_committed_models_were_trained_wi
         exported = REPO / scheduled.export / "run.json"
         if not exported.exists():
             continue
-        trained = json.loads(exported.read_text())
-        args, settings = plan.training_settings(scheduled)
+        raw = json.loads(exported.read_text())
+        stated = {RENAMED.get(k, k) for k in raw}  # what the file itself says, by today's names
+        trained = RunConfig.from_json(raw).to_json()
+        args, config = plan.training_settings(scheduled)
+        settings = config.to_json()
         for both in (trained, settings):  # a curriculum by its meaning, defaults filled in
             both["curriculum"] = Curriculum.from_settings(both.get("curriculum"))
         differ = {
             k: (trained[k], settings[k])
             for k in settings
-            if k in trained and trained[k] != settings[k]
+            if k in stated and trained[k] != settings[k]
         }
         assert not differ, f"{scheduled.export}: trained with / now {differ}"
         assert args.n_envs == COMPARISON_N_ENVS, scheduled.export

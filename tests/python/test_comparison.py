@@ -2,7 +2,7 @@
 
 import numpy as np
 import pytest
-from cstep_bridge import comparison, metrics
+from cstep_bridge.evaluation import comparison, metrics
 from scipy import stats
 
 

@@ -1,4 +1,4 @@
-"""cstep_bridge.scoring: the node's scoring step in this process (the cstep_scoring extension) —
+"""cstep_bridge.reward.scoring: the node's scoring step in this process (the cstep_scoring extension) —
 the same answers, bit for bit, as a live `cstep node`'s ``/cstep/evaluate_batch`` over real DDS,
 for both models; its argument errors; the envs and the trainer with ``reward_source="inprocess"``
 (real PyBullet, real SB3 PPO)."""
@@ -10,12 +10,17 @@ import gymnasium as gym
 import numpy as np
 import pytest
 from conftest import wait_until
-from cstep_bridge.batched_reward import make_batched_vec_env
-from cstep_bridge.maze import NODE_PARAMS
-from cstep_bridge.ros_io import STATES_PER_CALL, CStepNode
-from cstep_bridge.scoring import Scorer, bridge_scorer
-from cstep_bridge.train import load_settings
-from cstep_bridge.world import LIDAR_ANGLE_INCREMENT, LIDAR_ANGLE_MIN, LIDAR_RANGE, LIDAR_RANGE_MIN
+from cstep_bridge.envs.maze import NODE_PARAMS
+from cstep_bridge.reward.scoring import Scorer, bridge_scorer
+from cstep_bridge.ros.bridge import STATES_PER_CALL, CStepNode
+from cstep_bridge.sim.world import (
+    LIDAR_ANGLE_INCREMENT,
+    LIDAR_ANGLE_MIN,
+    LIDAR_RANGE,
+    LIDAR_RANGE_MIN,
+)
+from cstep_bridge.training.batched_reward import make_batched_vec_env
+from cstep_bridge.training.config import RunConfig
 from cstep_msgs.srv import EvaluateBatch
 from geometry_msgs.msg import Point
 from module_cli import run
@@ -286,4 +291,4 @@ def test_inprocess_training_end_to_end_and_old_runs_resume_over_the_node(tmp_pat
     # A run.json from before reward sources ran over the node, and resumes so.
     del stored["reward_source"]
     (out / "run.json").write_text(json.dumps(stored))
-    assert load_settings(out)["reward_source"] == "node"
+    assert RunConfig.load(out).reward_source == "node"

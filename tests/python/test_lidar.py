@@ -12,9 +12,10 @@ the comparison; they are about 3 % of the beams.
 import numpy as np
 import pybullet as p
 import pytest
-from cstep_bridge.maze import LAYOUT, MazeSim
-from cstep_bridge.sim import Arena, DroneSim
-from cstep_bridge.world import LIDAR_ANGLE_INCREMENT, LIDAR_ANGLE_MIN, LIDAR_BEAMS, LIDAR_RANGE
+from cstep_bridge.sim.drone import Arena, DroneSim
+from cstep_bridge.sim.maze import MazeSim
+from cstep_bridge.sim.maze_layout import LAYOUT
+from cstep_bridge.sim.world import LIDAR_ANGLE_INCREMENT, LIDAR_ANGLE_MIN, LIDAR_BEAMS, LIDAR_RANGE
 
 
 def pybullet_scan(client: int, position: np.ndarray, yaw: float, r0: float) -> np.ndarray:

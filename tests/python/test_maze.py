@@ -1,4 +1,4 @@
-"""cstep_bridge.maze: the point maze's layout, the ball's physics (real PyBullet), collisions,
+"""cstep_bridge.envs.maze: the point maze's layout, the ball's physics (real PyBullet), collisions,
 check_env, and the empowered reward from a live `cstep node` over real rclpy (own domain)."""
 
 import math
@@ -6,19 +6,11 @@ import math
 import numpy as np
 import pybullet as p
 import pytest
-from cstep_bridge.maze import (
-    BALL_RADIUS,
-    EPISODE_STEPS,
-    LAYOUT,
-    MAX_ACCELERATION,
-    NODE_PARAMS,
-    CStepMazeEnv,
-    MazeConfig,
-    configurations,
-    route_taken,
-)
-from cstep_bridge.ros_io import odometry_msg, scan_msg
-from cstep_bridge.sim import CONTROL_HZ
+from cstep_bridge.envs.maze import EPISODE_STEPS, NODE_PARAMS, CStepMazeEnv
+from cstep_bridge.ros.bridge import odometry_msg, scan_msg
+from cstep_bridge.sim.drone import CONTROL_HZ
+from cstep_bridge.sim.maze import BALL_RADIUS, MAX_ACCELERATION
+from cstep_bridge.sim.maze_layout import LAYOUT, MazeConfig, configurations, route_taken
 from gymnasium.utils.env_checker import check_env
 from node_rig import cstep_eval
 
@@ -192,8 +184,8 @@ def test_collision_value_floor_pays_the_floor_for_the_steps_left(ros_domain):
     """A collision under ``floor`` pays the node's floor reward (λ = 0 clamped: task reward ×
     (ln c + floor)) for this step and every step left, discounted; under ``none`` only the
     node's reward of the state reached. Both through one real point-mass node."""
-    from cstep_bridge.collision import held_return
-    from cstep_bridge.ros_io import RosBridge
+    from cstep_bridge.reward.collision import held_return
+    from cstep_bridge.ros.bridge import RosBridge
 
     c, gamma = 0.5, 0.97
     bridge = RosBridge(domain_id=ros_domain, safety_coefficient=c, node_params=NODE_PARAMS)

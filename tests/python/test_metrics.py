@@ -4,7 +4,7 @@ import json
 
 import numpy as np
 import pytest
-from cstep_bridge import eval_set, metrics
+from cstep_bridge.evaluation import eval_set, metrics
 
 DT = 0.1
 

@@ -6,7 +6,7 @@ import gymnasium as gym
 import numpy as np
 import pytest
 import torch
-from cstep_bridge.noise_cap import NoiseCap, apply_cap, noise_std
+from cstep_bridge.training.noise_cap import NoiseCap, apply_cap, noise_std
 from module_cli import run
 from stable_baselines3 import PPO
 

@@ -9,15 +9,15 @@ import numpy as np
 import pytest
 import torch
 from cstep_bridge.envs import make_env
-from cstep_bridge.flights import fly_saved
-from cstep_bridge.normalization import observation_normalizer, stats_path
+from cstep_bridge.evaluation.flights import fly_saved
 from cstep_bridge.observation import (
     GOAL_CHANNELS,
     GOAL_DISTANCE_FLOOR,
     GoalEncoding,
     PartialVecNormalize,
 )
-from cstep_bridge.sim import Arena
+from cstep_bridge.sim.drone import Arena
+from cstep_bridge.training.normalization import observation_normalizer, stats_path
 from module_cli import run
 from stable_baselines3 import PPO
 from stable_baselines3.common.vec_env import DummyVecEnv, VecNormalize

@@ -12,9 +12,9 @@ import time
 import numpy as np
 import pytest
 from conftest import DISCOVERY_TIMEOUT_S, wait_until
-from cstep_bridge import ros_io
-from cstep_bridge.ros_io import RosBridge
-from cstep_bridge.sim import DroneState
+from cstep_bridge.ros import bridge as ros_io
+from cstep_bridge.ros.bridge import RosBridge
+from cstep_bridge.sim.drone import DroneState
 from cstep_msgs.srv import Evaluate
 from diagnostic_msgs.msg import DiagnosticStatus
 from node_rig import CONFIG, corridor_scan, cstep_binary, odometry

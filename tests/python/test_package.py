@@ -15,12 +15,12 @@ import gymnasium as gym
 import numpy as np
 import pytest
 from cstep_bridge import resources
-from cstep_bridge.env import CStepDroneEnv
-from cstep_bridge.maze import CStepMazeEnv
-from cstep_bridge.resources import ResourceNotFound
-from cstep_bridge.ros_io import CStepNode
-from cstep_bridge.sim import Arena
-from cstep_bridge.world import RENDER_SIZE
+from cstep_bridge.envs.drone import CStepDroneEnv
+from cstep_bridge.envs.maze import CStepMazeEnv
+from cstep_bridge.errors import ResourceNotFound
+from cstep_bridge.ros.bridge import CStepNode
+from cstep_bridge.sim.drone import Arena
+from cstep_bridge.sim.world import RENDER_SIZE
 from gymnasium.utils.env_checker import check_env as gym_check_env
 from stable_baselines3.common.env_checker import check_env as sb3_check_env
 

@@ -12,10 +12,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from cstep_bridge import world
-from cstep_bridge.paper_world import PAPER_WORLD
-from cstep_bridge.sim import Arena
-from cstep_bridge.task_reward import task_reward
+from cstep_bridge.reward.task import task_reward
+from cstep_bridge.sim import world
+from cstep_bridge.sim.drone import Arena
+from cstep_bridge.sim.paper_world import PAPER_WORLD
 
 REPO = Path(__file__).resolve().parents[2]
 
@@ -63,7 +63,7 @@ def test_a_built_wheel_carries_the_files_contents(tmp_path):
 
 def test_the_task_reward_is_the_scorers():
     """The unempowered agent's reward (Python) against the task reward the scorer (Rust) pays."""
-    scoring = pytest.importorskip("cstep_bridge.scoring")
+    scoring = pytest.importorskip("cstep_bridge.reward.scoring")
     rng = np.random.default_rng(7)
     n = 64
     positions = rng.uniform(-3.0, 3.0, (n, 3))

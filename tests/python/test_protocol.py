@@ -5,11 +5,13 @@ import json
 
 import numpy as np
 import pytest
-from cstep_bridge import curriculum, eval_set, protocol, selection
 from cstep_bridge.envs import make_env
-from cstep_bridge.maze import LAYOUT
-from cstep_bridge.sim import Arena
-from cstep_bridge.train import build_model, parse_args, run_settings
+from cstep_bridge.evaluation import eval_set
+from cstep_bridge.sim.drone import Arena
+from cstep_bridge.sim.maze_layout import LAYOUT
+from cstep_bridge.training import curriculum, protocol, selection
+from cstep_bridge.training.config import RunConfig
+from cstep_bridge.training.trainer import build_model, parse_args, run_settings
 from stable_baselines3 import PPO
 from stable_baselines3.common.env_util import make_vec_env
 
@@ -32,19 +34,19 @@ def test_the_paper_protocol_is_the_papers_appendix():
 def test_every_protocol_builds_a_ppo_model_with_its_settings(name, env, tmp_path):
     args = parse_args(["--env", env, "--agent", "unempowered", "--protocol", name, "--out", "x"])
     settings = run_settings(args)
-    assert settings["protocol"] == name
+    assert settings.protocol == name
     venv = make_vec_env(lambda: make_env(env, empowered=False), n_envs=1)
     try:
         model = build_model(settings, venv)
         net = model.policy.mlp_extractor.policy_net
         layers = [m.out_features for m in net if hasattr(m, "out_features")]
-        assert layers == settings["net"]
+        assert layers == settings.net
         assert (model.gamma, model.n_steps, model.use_sde) == (
-            settings["gamma"],
-            settings["n_steps"],
-            settings["use_sde"],
+            settings.gamma,
+            settings.n_steps,
+            settings.use_sde,
         )
-        assert model.policy.log_std.detach().numpy() == pytest.approx(settings["log_std_init"])
+        assert model.policy.log_std.detach().numpy() == pytest.approx(settings.log_std_init)
     finally:
         venv.close()
 
@@ -65,8 +67,8 @@ def test_hyperparams_override_one_entry_and_mappings_merge():
     )
     s = run_settings(args)
     tuned = protocol.settings(protocol.load("tuned", "drone"))
-    assert s["gamma"] == 0.97 and s["n_epochs"] == 3
-    assert s["log_std_init"] == -2 and s["net"] == tuned["net"]  # net_arch kept
+    assert s.gamma == 0.97 and s.n_epochs == 3
+    assert s.log_std_init == -2 and s.net == tuned["net"]  # net_arch kept
 
 
 @pytest.mark.parametrize(
@@ -82,8 +84,8 @@ def test_a_bad_hyperparameter_is_refused_with_its_name(bad, message, capsys):
     assert message in capsys.readouterr().err
 
 
-def tuned_settings(*hyperparams: str) -> dict:
-    """The run settings of the tuned protocol with ``--hyperparams`` overrides."""
+def tuned_settings(*hyperparams: str) -> RunConfig:
+    """The run configuration of the tuned protocol with ``--hyperparams`` overrides."""
     return run_settings(
         parse_args(["--protocol", "tuned", "--out", "x", "--hyperparams", *hyperparams])
     )
@@ -97,7 +99,7 @@ def test_squashed_gsde_builds_a_policy_whose_actions_stay_in_the_box(tmp_path):
         "batch_size=64",
         "policy_kwargs={squash_output: true, use_expln: true}",
     )
-    assert s["squash_output"] and s["use_expln"] and s["net"] == [256, 256]  # others merged
+    assert s.squash_output and s.use_expln and s.net == [256, 256]  # others merged
     venv = make_vec_env(lambda: make_env("drone", empowered=False), n_envs=1, seed=3)
     try:
         model = build_model(s, venv)
@@ -343,7 +345,7 @@ def test_validation_keeps_the_best_model_and_logs_each_round(tmp_path):
 
 
 def test_the_floor_held_for_the_remaining_steps_is_its_discounted_sum():
-    from cstep_bridge.collision import held_return
+    from cstep_bridge.reward.collision import held_return
 
     assert held_return(-2.0, 1, 0.99) == pytest.approx(-2.0)  # the last step: itself only
     assert held_return(-2.0, 3, 0.5) == pytest.approx(-2.0 * (1 + 0.5 + 0.25))

@@ -1,6 +1,7 @@
 """The trainer and the evaluation CLI, end to end on tiny runs: real PyBullet, real SB3 PPO, and for
 the empowered agent a real `cstep node` over real DDS (on a private domain, shared by its envs)."""
 
+import dataclasses
 import json
 import pickle
 import shutil
@@ -9,10 +10,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 import torch
-from cstep_bridge import training_log
 from cstep_bridge.envs import make_env
-from cstep_bridge.evaluate import Agent, group_seeds
-from cstep_bridge.train import build_model, learn_sde_features, parse_args, run_settings
+from cstep_bridge.evaluation.evaluate import Agent, group_seeds
+from cstep_bridge.training import training_log
+from cstep_bridge.training.config import RunConfig
+from cstep_bridge.training.trainer import build_model, learn_sde_features, parse_args, run_settings
 from module_cli import run
 from stable_baselines3 import PPO
 from stable_baselines3.common.env_util import make_vec_env
@@ -124,7 +126,7 @@ def test_empowered_training_with_two_envs_sharing_one_node(tmp_path):
     assert np.isfinite(empowerment)
     assert PPO.load(out / "model.zip", device="cpu").num_timesteps == 128
     stored = json.loads((out / "run.json").read_text())
-    assert (stored["c"], stored["reward_source"]) == (0.5, "node")
+    assert (stored["safety_coefficient"], stored["reward_source"]) == (0.5, "node")
     # One batched vector env, so one episode log (VecMonitor's) instead of one per env.
     assert [p.name for p in (out / "monitor").iterdir()] == ["batched.monitor.csv"]
 
@@ -371,16 +373,16 @@ def test_a_finished_run_is_selected_again_by_another_rule_set_or_span(drone_run,
 
 
 def test_learnt_gsde_features_let_the_policy_gradient_shape_the_noise(tmp_path):
-    def settings(*hyperparams: str) -> dict:
+    def settings(*hyperparams: str) -> RunConfig:
         args = ["--protocol", "tuned", "--out", "x", "--hyperparams", *hyperparams]
-        return {**run_settings(parse_args(args)), "seed": 3}
+        return dataclasses.replace(run_settings(parse_args(args)), seed=3)
 
     obs, grads = None, {}
     venv = make_vec_env(lambda: make_env("drone", empowered=False), n_envs=1, seed=3)
     try:
         for learn in (False, True):
             s = settings(f"sde_learn_features={str(learn).lower()}")
-            assert s["sde_learn_features"] is learn
+            assert s.sde_learn_features is learn
             model = build_model(s, venv)
             obs = venv.reset() if obs is None else obs
             assert model.policy.action_dist.learn_features is learn

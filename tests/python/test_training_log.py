@@ -5,7 +5,7 @@ import time
 
 import gymnasium as gym
 import numpy as np
-from cstep_bridge import training_log
+from cstep_bridge.training import training_log
 from stable_baselines3.common.monitor import Monitor
 from stable_baselines3.common.vec_env import DummyVecEnv
 

@@ -10,7 +10,7 @@ import re
 import cstep_scoring
 import pytest
 from cstep_bridge.resources import drone_urdf
-from cstep_bridge.sim import DroneParams, G
+from cstep_bridge.sim.drone import DroneParams, G
 
 SHIPPED = drone_urdf().read_text()
 

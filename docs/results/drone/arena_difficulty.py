@@ -26,9 +26,9 @@ import json
 from pathlib import Path
 
 import numpy as np
-from cstep_bridge import eval_set
-from cstep_bridge.sim import Arena, DroneParams
-from cstep_bridge.world import rect_distance
+from cstep_bridge.evaluation import eval_set
+from cstep_bridge.sim.drone import Arena, DroneParams
+from cstep_bridge.sim.world import rect_distance
 from goal_tracking import flown_results_parser
 
 LINE_SAMPLES = 400

@@ -23,8 +23,8 @@ from pathlib import Path
 
 import numpy as np
 from arena_difficulty import block_patch, line_clearance
-from cstep_bridge import eval_set
-from cstep_bridge.sim import Arena, DroneParams
+from cstep_bridge.evaluation import eval_set
+from cstep_bridge.sim.drone import Arena, DroneParams
 from goal_tracking import flown_results_parser
 
 CORNER_SHARE = 0.15

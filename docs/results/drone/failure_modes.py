@@ -1,5 +1,5 @@
 """Where does a drone policy fail, and how does it act? Flies a model's policy (acting by one of
-``cstep_bridge.acting``'s rules: ``--action``) on the evaluation arenas and reports success by
+``cstep_bridge.evaluation.acting``'s rules: ``--action``) on the evaluation arenas and reports success by
 how close the goal lies to a wall, how many collisions were with the block, where the failed
 episodes ended, and how saturated the actions are (for a tanh-squashed gSDE policy also the size
 of its pre-squash mean and exploration noise, over all steps and near the goal), success and
@@ -22,13 +22,13 @@ import itertools
 from pathlib import Path
 
 import numpy as np
-from cstep_bridge.acting import ACTING_RULES, DEFAULT_ACTING_RULE, actor
-from cstep_bridge.env import CStepDroneEnv
-from cstep_bridge.flights import configurations, reset_options
-from cstep_bridge.noise_cap import state_noise
-from cstep_bridge.normalization import observation_normalizer
-from cstep_bridge.sim import CONTROL_HZ
-from cstep_bridge.world import rect_distance
+from cstep_bridge.envs.drone import CStepDroneEnv
+from cstep_bridge.evaluation.acting import ACTING_RULES, DEFAULT_ACTING_RULE, actor
+from cstep_bridge.evaluation.flights import configurations, reset_options
+from cstep_bridge.sim.drone import CONTROL_HZ
+from cstep_bridge.sim.world import rect_distance
+from cstep_bridge.training.noise_cap import state_noise
+from cstep_bridge.training.normalization import observation_normalizer
 from stable_baselines3 import PPO
 
 WALL_BINS = (0.0, 0.3, 0.6, 10.0)

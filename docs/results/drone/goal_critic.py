@@ -17,9 +17,9 @@ from pathlib import Path
 
 import numpy as np
 import torch
-from cstep_bridge.env import CStepDroneEnv
-from cstep_bridge.flights import configurations
-from cstep_bridge.normalization import observation_normalizer
+from cstep_bridge.envs.drone import CStepDroneEnv
+from cstep_bridge.evaluation.flights import configurations
+from cstep_bridge.training.normalization import observation_normalizer
 from stable_baselines3 import PPO
 
 OFFSETS = (0.0, 0.1, 0.2, 0.3, 0.4, 0.6)

@@ -9,7 +9,7 @@ Without ``--model`` it flies a proportional controller on the observed goal offs
 ``a = clip((goal − p) / max_offset)``: what the observation allows, obstacles aside. With a model
 it flies that policy's deterministic actions (through its saved observation statistics).
 ``--fraction`` sets the training curriculum's goal fraction (1 = the task's goals), as the
-curriculum does during training (:mod:`cstep_bridge.curriculum`).
+curriculum does during training (:mod:`cstep_bridge.training.curriculum`).
 """
 
 from __future__ import annotations
@@ -18,8 +18,8 @@ import argparse
 from pathlib import Path
 
 import numpy as np
-from cstep_bridge.env import CStepDroneEnv
-from cstep_bridge.normalization import observation_normalizer
+from cstep_bridge.envs.drone import CStepDroneEnv
+from cstep_bridge.training.normalization import observation_normalizer
 
 
 def main() -> int:

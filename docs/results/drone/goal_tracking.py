@@ -23,7 +23,7 @@ import json
 from pathlib import Path
 
 import numpy as np
-from cstep_bridge import eval_set
+from cstep_bridge.evaluation import eval_set
 
 
 def flown_results_parser(description: str) -> argparse.ArgumentParser:

@@ -12,12 +12,14 @@ step shrunk below its eps.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 from pathlib import Path
 
 import numpy as np
 import torch
-from cstep_bridge.normalization import stats_path
-from cstep_bridge.train import load_settings, training_vec_env
+from cstep_bridge.training.config import RunConfig
+from cstep_bridge.training.normalization import stats_path
+from cstep_bridge.training.trainer import training_vec_env
 from stable_baselines3 import PPO
 from stable_baselines3.common.callbacks import BaseCallback
 from stable_baselines3.common.vec_env import VecNormalize
@@ -39,10 +41,8 @@ def main() -> int:
     ap.add_argument("--n-envs", type=int, help="envs of the rollout (default: the run's)")
     args = ap.parse_args()
     torch.set_num_threads(1)
-    settings = {**load_settings(args.run), "curriculum": None}  # the whole task
-    n_envs = (
-        args.n_envs or settings.get("n_envs") or 16
-    )  # 16: the sweep's runs before run.json held it
+    settings = dataclasses.replace(RunConfig.load(args.run), curriculum=None)  # the whole task
+    n_envs = args.n_envs or settings.n_envs or 16  # 16: the sweep's runs before run.json held it
     venv = training_vec_env(settings, n_envs, "dummy", None)
     stats = stats_path(args.run / args.model)
     venv = VecNormalize.load(str(stats), venv) if stats.exists() else venv

@@ -20,7 +20,7 @@ import re
 from pathlib import Path
 
 import numpy as np
-from cstep_bridge import training_log
+from cstep_bridge.training import training_log
 
 LAST_STEPS = 100_000
 SEEDED = re.compile(r"-s\d+$")

@@ -19,11 +19,11 @@ from pathlib import Path
 
 import numpy as np
 import torch
-from cstep_bridge.env import CStepDroneEnv
-from cstep_bridge.flights import configurations, reset_options
-from cstep_bridge.noise_cap import state_noise
-from cstep_bridge.normalization import observation_normalizer
-from cstep_bridge.train import load_settings
+from cstep_bridge.envs.drone import CStepDroneEnv
+from cstep_bridge.evaluation.flights import configurations, reset_options
+from cstep_bridge.training.config import RunConfig
+from cstep_bridge.training.noise_cap import state_noise
+from cstep_bridge.training.normalization import observation_normalizer
 from stable_baselines3 import PPO
 
 
@@ -84,7 +84,7 @@ def main() -> int:
     checkpoints = sorted((args.run / "checkpoints").glob("ppo_*_steps.zip"), key=checkpoint_steps)
     if not checkpoints:
         raise SystemExit(f"{args.run}/checkpoints: no ppo_<steps>_steps.zip")
-    hold = max(1, load_settings(args.run)["sde_sample_freq"])
+    hold = max(1, RunConfig.load(args.run).sde_sample_freq)
     states = random_flight_states(args.arenas, args.steps, hold, args.seed)
     print(f"# {args.run}: {len(states)} states of random flights on {args.arenas} arenas\n")
     print("| checkpoint (steps) | median abs(z) | RMS sigma | median noise std (pre-squash) |")

@@ -20,10 +20,10 @@ import sys
 from pathlib import Path
 
 import numpy as np
-from cstep_bridge.env import CStepDroneEnv
-from cstep_bridge.eval_set import load
-from cstep_bridge.ros_io import RosBridge
-from cstep_bridge.sim import DroneState
+from cstep_bridge.envs.drone import CStepDroneEnv
+from cstep_bridge.evaluation.eval_set import load
+from cstep_bridge.ros.bridge import RosBridge
+from cstep_bridge.sim.drone import DroneState
 
 C_VALUES = (10.0, 1.0, 0.5)
 GRID_STEP = 0.05  # m

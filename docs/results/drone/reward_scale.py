@@ -19,10 +19,10 @@ import argparse
 from pathlib import Path
 
 import numpy as np
-from cstep_bridge.env import CStepDroneEnv
-from cstep_bridge.eval_set import load
-from cstep_bridge.normalization import observation_normalizer
-from cstep_bridge.ros_io import RosBridge
+from cstep_bridge.envs.drone import CStepDroneEnv
+from cstep_bridge.evaluation.eval_set import load
+from cstep_bridge.ros.bridge import RosBridge
+from cstep_bridge.training.normalization import observation_normalizer
 from stable_baselines3 import PPO
 
 C_VALUES = (10.0, 1.0, 0.5)

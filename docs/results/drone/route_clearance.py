@@ -23,10 +23,10 @@ import sys
 from pathlib import Path
 
 import numpy as np
-from cstep_bridge.env import CStepDroneEnv
-from cstep_bridge.eval_set import load
-from cstep_bridge.ros_io import RosBridge
-from cstep_bridge.sim import CONTROL_HZ
+from cstep_bridge.envs.drone import CStepDroneEnv
+from cstep_bridge.evaluation.eval_set import load
+from cstep_bridge.ros.bridge import RosBridge
+from cstep_bridge.sim.drone import CONTROL_HZ
 
 C_VALUES = (10.0, 1.0, 0.5)
 GAMMA = 0.995  # the drone protocol's (hyperparams/tuned.yml)

@@ -18,7 +18,7 @@ import json
 import re
 from pathlib import Path
 
-from cstep_bridge import protocol
+from cstep_bridge.training import protocol
 from run_row import measures
 
 BAR_SUCCESS, BAR_COLLISIONS = 0.85, 0.05
@@ -57,6 +57,8 @@ def run_order(run: Path) -> tuple[int, str]:
 def table_row(run: Path, reference: dict) -> dict:
     """``run``'s row of the table (see the module docstring)."""
     settings = json.loads((run / "run.json").read_text())
+    if "safety_coefficient" in settings:  # the name a newer run.json gives the column c
+        settings["c"] = settings.pop("safety_coefficient")
     m = measures(run)
     number = re.match(r"d(\d+)", run.name)
     arenas = m["arenas"]

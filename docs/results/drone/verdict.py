@@ -18,7 +18,7 @@ from collections import defaultdict
 from pathlib import Path
 
 import numpy as np
-from cstep_bridge import comparison
+from cstep_bridge.evaluation import comparison
 
 ALPHA = 0.05
 LEARNT = 50.0  # percent success: an agent that learnt the task

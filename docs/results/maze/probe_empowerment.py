@@ -8,7 +8,7 @@ negative empowerment and at the floor (every sampled trajectory collides: −9.2
 """
 
 import numpy as np
-from cstep_bridge.maze import CStepMazeEnv
+from cstep_bridge.envs.maze import CStepMazeEnv
 from stable_baselines3 import PPO
 
 env = CStepMazeEnv(empowered=True, safety_coefficient=1.0)

@@ -16,7 +16,7 @@ measurements on the point maze that need no trained agent, only the node:
 
 Writes ``reward_landscape.md`` (tables) and ``reward_landscape.png`` (the empowerment map and the
 reward maps of two goals). E, the node's empowerment at the maze's settings
-(:data:`cstep_bridge.maze.NODE_PARAMS`), does not depend on c or on the goal, so one pass of node
+(:data:`cstep_bridge.envs.maze.NODE_PARAMS`), does not depend on c or on the goal, so one pass of node
 calls gives every c: the reward is ``r_d · (ln c + E)`` with the task reward ``r_d = exp(−d)``.
 """
 
@@ -30,16 +30,11 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
-from cstep_bridge.maze import (
-    BALL_RADIUS,
-    LAYOUT,
-    MAX_ACCELERATION,
-    NODE_PARAMS,
-    SUCCESS_RADIUS,
-    CStepMazeEnv,
-)
-from cstep_bridge.ros_io import RosBridge
-from cstep_bridge.sim import CONTROL_HZ, DroneState
+from cstep_bridge.envs.maze import NODE_PARAMS, SUCCESS_RADIUS, CStepMazeEnv
+from cstep_bridge.ros.bridge import RosBridge
+from cstep_bridge.sim.drone import CONTROL_HZ, DroneState
+from cstep_bridge.sim.maze import BALL_RADIUS, MAX_ACCELERATION
+from cstep_bridge.sim.maze_layout import LAYOUT
 
 C_VALUES = (10.0, 1.0, 0.5)
 GAMMA = 0.99  # the maze protocol's (hyperparams/tuned.yml)

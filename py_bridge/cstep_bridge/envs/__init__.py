@@ -1,7 +1,7 @@
 """The environments by name, so the trainer, the evaluation and Gymnasium build them the same way.
 
-``drone`` is :class:`~cstep_bridge.env.CStepDroneEnv` (the paper's PyBullet drone arena) and
-``maze`` is :class:`~cstep_bridge.maze.CStepMazeEnv` (the paper's point maze). Each module is
+``drone`` is :class:`~cstep_bridge.envs.drone.CStepDroneEnv` (the paper's PyBullet drone arena) and
+``maze`` is :class:`~cstep_bridge.envs.maze.CStepMazeEnv` (the paper's point maze). Each module is
 imported only when its environment is asked for.
 
 Gymnasium knows them as ``cstep/Drone-v0`` and ``cstep/PointMaze-v0`` (namespace ``cstep``):
@@ -18,6 +18,8 @@ from typing import Any
 import gymnasium as gym
 from gymnasium.envs.registration import load_env_creator
 
+from ..errors import ConfigError
+
 
 @dataclass(frozen=True)
 class EnvEntry:
@@ -31,7 +33,7 @@ class EnvEntry:
 
 ENVS = {
     "drone": EnvEntry("cstep/Drone-v0", "cstep_bridge.env:CStepDroneEnv"),
-    "maze": EnvEntry("cstep/PointMaze-v0", "cstep_bridge.maze:CStepMazeEnv"),
+    "maze": EnvEntry("cstep/PointMaze-v0", "cstep_bridge.envs.maze:CStepMazeEnv"),
 }
 """Every environment by the name the command-line tools take."""
 
@@ -40,8 +42,8 @@ ENV_NAMES = tuple(ENVS)
 
 REWARD_SOURCES = ("node", "inprocess")
 """Where an empowered env's reward is computed (its ``reward_source``): a ``cstep node`` over ROS
-(:mod:`~cstep_bridge.ros_io`), or the node's scoring function in this process
-(:mod:`~cstep_bridge.scoring`). The answers are the same, bit for bit."""
+(:mod:`~cstep_bridge.ros.bridge`), or the node's scoring function in this process
+(:mod:`~cstep_bridge.reward.scoring`). The answers are the same, bit for bit."""
 
 
 def make_env(
@@ -50,7 +52,7 @@ def make_env(
     """A new environment ``name`` (one of :data:`ENV_NAMES`), unwrapped; ``kwargs`` go to its
     constructor."""
     if name not in ENVS:
-        raise ValueError(f"unknown environment {name!r}: choose one of {', '.join(ENV_NAMES)}")
+        raise ConfigError(f"unknown environment {name!r}: choose one of {', '.join(ENV_NAMES)}")
     return load_env_creator(ENVS[name].entry_point)(empowered, safety_coefficient, **kwargs)
 
 

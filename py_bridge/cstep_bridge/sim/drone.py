@@ -1,7 +1,7 @@
 """PyBullet world of the paper's drone experiment: arena, obstacle block, Crazyflie, 2D LiDAR, PID.
 
 Geometry as the authors' prototype codes it (``config/paper_world.json``, which the Rust core's
-``arena.rs`` reads too; :mod:`~cstep_bridge.paper_world`): the inner area is
+``arena.rs`` reads too; :mod:`~cstep_bridge.sim.paper_world`): the inner area is
 x ∈ [−0.5, 4.5], y ∈ [−1.75, 0.75], z ∈ [0, 2] (the paper's 5 m × 2.5 m × 2 m); the obstacle is
 two 1.0 m × 0.5 m blocks centred at (1, ``block_y``) and (2, ``block_y``), i.e. one 2 m × 0.5 m
 block spanning x ∈ [0.5, 2.5], y ∈ [``block_y`` − 0.25, ``block_y`` + 0.25], 2 m high, with
@@ -32,14 +32,9 @@ from pathlib import Path
 import numpy as np
 import pybullet as p
 
+from ..resources import drone_urdf
 from .paper_world import ARENA
-from .resources import drone_urdf
-from .world import (
-    LIDAR_BEAMS,  # noqa: F401 (re-exported: the drone carries the shared LiDAR)
-    PHYSICS_HZ,
-    PhysicsWorld,
-    rect_distance,
-)
+from .world import PHYSICS_HZ, PhysicsWorld, rect_distance
 
 G = 9.8
 CONTROL_HZ = 30

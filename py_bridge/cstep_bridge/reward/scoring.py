@@ -6,7 +6,7 @@ of states through the same function the node's ``/cstep/evaluate_batch`` service
 same input checks, on all cores with the GIL released, so a state gets the same numbers, bit
 for bit, as from a node started with the same parameters::
 
-    from cstep_bridge.scoring import Scorer
+    from cstep_bridge.reward.scoring import Scorer
     scorer = Scorer(model="point_mass", safety_coefficient=0.5)
     answer = scorer.score_batch(positions, orientations, velocities, angular_velocities,
                                 scans, goals, in_collision, angle_min=-3.14159, ...)
@@ -14,7 +14,7 @@ for bit, as from a node started with the same parameters::
 
 (``help(Scorer.score_batch)`` gives the shapes and units.) :func:`bridge_scorer` is the scorer
 a bridge's private node would be, and :func:`score_requests` scores the envs'
-:class:`~cstep_bridge.env.RewardRequest` s with it: the envs' and the trainer's
+:class:`~cstep_bridge.envs.drone.RewardRequest` s with it: the envs' and the trainer's
 ``reward_source="inprocess"``.
 """
 
@@ -25,14 +25,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .resources import config_file
-from .world import LIDAR_ANGLE_INCREMENT, LIDAR_ANGLE_MIN, LIDAR_RANGE, LIDAR_RANGE_MIN
+from ..resources import config_file
+from ..sim.world import LIDAR_ANGLE_INCREMENT, LIDAR_ANGLE_MIN, LIDAR_RANGE, LIDAR_RANGE_MIN
 
 try:
     from cstep_scoring import Scorer
 except ImportError as err:  # pragma: no cover - depends on the install
     raise ImportError(
-        "cstep_bridge.scoring needs the cstep_scoring extension (crates/cstep-py): `make venv` "
+        "cstep_bridge.reward.scoring needs the cstep_scoring extension (crates/cstep-py): `make venv` "
         "builds it into .venv, or `pip install ./crates/cstep-py` (Rust and maturin needed)"
     ) from err
 
@@ -42,7 +42,7 @@ __all__ = ["Answer", "Scorer", "bridge_scorer", "score_requests"]
 @dataclass(frozen=True)
 class Answer:
     """The scorer's answer for one state: what an env reads from the node's
-    (:class:`~cstep_bridge.ros_io.Reward` has the same fields)."""
+    (:class:`~cstep_bridge.ros.bridge.Reward` has the same fields)."""
 
     reward: float
     task_reward: float
@@ -62,7 +62,7 @@ def _parameter(text: str) -> int | float | str:
 
 
 def bridge_scorer(safety_coefficient: float, node_params: dict[str, str] | None = None) -> Scorer:
-    """The scorer of a bridge's private node (:class:`~cstep_bridge.ros_io.CStepNode`): the
+    """The scorer of a bridge's private node (:class:`~cstep_bridge.ros.bridge.CStepNode`): the
     packaged parameters file, then ``node_params`` (the node's ``-p`` values as text, numbers
     read as numbers), then ``safety_coefficient``."""
     params = {k: _parameter(v) for k, v in (node_params or {}).items()}
@@ -70,9 +70,9 @@ def bridge_scorer(safety_coefficient: float, node_params: dict[str, str] | None 
 
 
 def score_requests(scorer: Scorer, requests: Sequence) -> list[Answer]:
-    """``scorer``'s answers for the envs' :class:`~cstep_bridge.env.RewardRequest` s, in order,
-    in one batch: each state, scan (the simulated LiDAR's layout, :mod:`~cstep_bridge.world`),
-    goal and collision flag exactly as :class:`~cstep_bridge.ros_io.RosBridge` sends them to
+    """``scorer``'s answers for the envs' :class:`~cstep_bridge.envs.drone.RewardRequest` s, in order,
+    in one batch: each state, scan (the simulated LiDAR's layout, :mod:`~cstep_bridge.sim.world`),
+    goal and collision flag exactly as :class:`~cstep_bridge.ros.bridge.RosBridge` sends them to
     the node."""
     states = [r.state for r in requests]
     goals = [r.goal for r in requests]

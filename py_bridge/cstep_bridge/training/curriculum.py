@@ -31,7 +31,7 @@ before the agent can stop at a goal; ``held`` keeps the agent on them until it c
 sweep's failure: agents that circle 0.3 m from the goal, ``docs/results/protocol.md``). Only the
 promotions change; the task, its reward and its success stay the same.
 
-Configured by a protocol's ``curriculum`` entry (see :mod:`~cstep_bridge.protocol`)::
+Configured by a protocol's ``curriculum`` entry (see :mod:`~cstep_bridge.training.protocol`)::
 
     curriculum:
       levels: [0.25, 0.5, 0.75, 1.0]   # fractions f, last = 1
@@ -45,11 +45,17 @@ Configured by a protocol's ``curriculum`` entry (see :mod:`~cstep_bridge.protoco
 from __future__ import annotations
 
 import json
+import logging
 from dataclasses import dataclass, fields
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+
+from ..errors import ConfigError
+
+logger = logging.getLogger(__name__)
+"""Where this module's messages go (on stdout under the command-line tools)."""
 
 CLEARANCE = 0.3
 """A curriculum goal is at least this far (m) from every obstacle (walls, block)."""
@@ -80,27 +86,27 @@ class Curriculum:
             return None
         unknown = set(value) - {f.name for f in fields(cls)}
         if unknown:
-            raise ValueError(f"curriculum: unknown keys {sorted(unknown)}")
+            raise ConfigError(f"curriculum: unknown keys {sorted(unknown)}")
         levels = tuple(float(v) for v in value.get("levels", (0.25, 0.5, 0.75, 1.0)))
         if not levels or levels[-1] != 1.0 or any(not 0 < f <= 1 for f in levels):
-            raise ValueError(f"curriculum levels must lie in (0, 1] and end at 1, not {levels}")
+            raise ConfigError(f"curriculum levels must lie in (0, 1] and end at 1, not {levels}")
         if list(levels) != sorted(levels):
-            raise ValueError(f"curriculum levels must increase, not {levels}")
+            raise ConfigError(f"curriculum levels must increase, not {levels}")
         promote_at = float(value.get("promote_at", 0.7))
         window = int(value.get("window", 60))
         if not 0 < promote_at <= 1 or window <= 0:
-            raise ValueError("curriculum: promote_at must be in (0, 1] and window > 0")
+            raise ConfigError("curriculum: promote_at must be in (0, 1] and window > 0")
         full_task_share = float(value.get("full_task_share", 0.0))
         if not 0 <= full_task_share < 1:
-            raise ValueError(
+            raise ConfigError(
                 f"curriculum: full_task_share must be in [0, 1), not {full_task_share}"
             )
         moves = str(value.get("moves", "goal"))
         if moves not in MOVES:
-            raise ValueError(f"curriculum: moves must be one of {MOVES}, not {moves!r}")
+            raise ConfigError(f"curriculum: moves must be one of {MOVES}, not {moves!r}")
         promote_on = str(value.get("promote_on", cls.promote_on))
         if promote_on not in PROMOTE_ON:
-            raise ValueError(
+            raise ConfigError(
                 f"curriculum: promote_on must be one of {PROMOTE_ON}, not {promote_on!r}"
             )
         return cls(levels, promote_at, window, full_task_share, moves, promote_on)
@@ -177,6 +183,7 @@ def make_callback(curriculum: Curriculum, state: Path):
     """An SB3 callback that sets the envs' ``goal_fraction`` and moves up the levels; each
     promotion is kept in the JSON file ``state``, so a resumed run goes on from the level of the
     checkpoint it resumes."""
+    # stable-baselines3 is the train extra: the envs use this module without it
     from stable_baselines3.common.callbacks import BaseCallback
 
     class GoalCurriculum(BaseCallback):
@@ -212,10 +219,9 @@ def make_callback(curriculum: Curriculum, state: Path):
                 and np.mean(recent) >= curriculum.promote_at
             ):
                 self.level += 1
-                print(
+                logger.info(
                     f"curriculum: level {self.level} (goal fraction "
                     f"{curriculum.levels[self.level]:g}) at step {self.num_timesteps}",
-                    flush=True,
                 )
                 self._apply()
                 self.history.append([self.num_timesteps, self.level])

@@ -13,8 +13,8 @@ import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.patches import Rectangle
 
+from ..training.training_log import read_monitor
 from .comparison import Interval
-from .training_log import read_monitor
 
 Rect = tuple[float, float, float, float]  # x0, y0, x1, y1
 
@@ -42,7 +42,7 @@ def training_curves(
     title: str = "",
 ) -> None:
     """Training across seeds, per agent: its seeds' training success rate (moving average of
-    :data:`SEED_WINDOW` episodes, :func:`~cstep_bridge.training_log.read_monitor`'s rows) and
+    :data:`SEED_WINDOW` episodes, :func:`~cstep_bridge.training.training_log.read_monitor`'s rows) and
     validation success rate (``validation.csv`` rows) over training steps — the mean over seeds as
     a line, their range as a band. Each agent maps to one (episodes, validations) pair per seed;
     either may be None where a seed lacks it."""

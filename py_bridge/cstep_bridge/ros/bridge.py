@@ -66,11 +66,11 @@ from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy, qos_profi
 from rosgraph_msgs.msg import Clock
 from sensor_msgs.msg import LaserScan
 
-from .errors import NodeDied, RewardTimeout
-from .resources import config_file, cstep_binary
-from .sim import DroneState
-from .task_reward import task_reward
-from .world import LIDAR_ANGLE_INCREMENT, LIDAR_ANGLE_MIN, LIDAR_RANGE, LIDAR_RANGE_MIN
+from ..errors import ConfigError, NodeDied, NodeError, RewardTimeout
+from ..resources import config_file, cstep_binary
+from ..reward.task import task_reward
+from ..sim.drone import DroneState
+from ..sim.world import LIDAR_ANGLE_INCREMENT, LIDAR_ANGLE_MIN, LIDAR_RANGE, LIDAR_RANGE_MIN
 
 RELIABLE = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
 LATCHED = QoSProfile(
@@ -282,7 +282,7 @@ class RosBridge:
         publish_sim_topics: bool = True,
     ) -> None:
         if mode not in ("service", "topic"):
-            raise ValueError(f"mode must be 'service' or 'topic', not {mode!r}")
+            raise ConfigError(f"mode must be 'service' or 'topic', not {mode!r}")
         self.mode = mode
         self.publish_sim_topics = publish_sim_topics or mode == "topic"
         self.timeout = timeout
@@ -355,7 +355,7 @@ class RosBridge:
                 return
             tried.append(f"{self.domain_id} ({', '.join(others[:3])})")
             self._leave()
-        raise RuntimeError(
+        raise NodeError(
             f"no free ROS domain for a private cstep node after {DOMAIN_TRIES} tries; "
             f"occupied: {'; '.join(tried)}"
         )
@@ -447,7 +447,7 @@ class RosBridge:
             )
         servers = self.node.count_services(SERVICE)
         if servers != 1:
-            raise RuntimeError(
+            raise NodeError(
                 f"{servers} nodes serve {SERVICE} on ROS_DOMAIN_ID {self.domain_id}: their "
                 "answers would mix; stop all but one, or use another domain"
             )
@@ -537,7 +537,7 @@ class RosBridge:
             request.in_collision = in_collision
         response = self._call(request, self.timeout)
         if not len(response.empowerment) == len(response.reward) == len(odoms):
-            raise RuntimeError(
+            raise NodeError(
                 f"the cstep node answered {len(response.empowerment)} scores and "
                 f"{len(response.reward)} rewards for {len(odoms)} states"
             )
@@ -548,12 +548,12 @@ class RosBridge:
         """The node's answer as a :class:`Reward`, after checking that it used this bridge's
         safety coefficient and that the reward is finite."""
         if not math.isclose(r.safety_coefficient, self.safety_coefficient, rel_tol=1e-9):
-            raise RuntimeError(
+            raise NodeError(
                 f"the cstep node uses safety_coefficient {r.safety_coefficient}, this bridge "
                 f"expects {self.safety_coefficient}"
             )
         if not math.isfinite(r.reward):
-            raise RuntimeError(f"the cstep node sent a non-finite reward {r.reward}")
+            raise NodeError(f"the cstep node sent a non-finite reward {r.reward}")
         return Reward(
             reward=r.reward,
             task_reward=r.task_reward,

@@ -20,22 +20,22 @@ import sys
 from importlib.metadata import version
 from pathlib import Path
 
+from ..resources import PACKAGE, drone_urdf
+from ..training.normalization import stats_path
 from .metrics import Episode
-from .normalization import stats_path
-from .resources import drone_urdf
 
-PACKAGE_DIR = Path(__file__).resolve().parent
 LIBRARIES = ("pybullet", "torch", "stable-baselines3", "numpy", "scipy")
 FLYING_MODULES = (
-    "flights",
-    "acting",
+    "evaluation.flights",
+    "evaluation.acting",
     "envs",
-    "env",
-    "maze",
-    "sim",
-    "world",
-    "normalization",
-    "metrics",
+    "envs.drone",
+    "envs.maze",
+    "sim.drone",
+    "sim.maze",
+    "sim.world",
+    "training.normalization",
+    "evaluation.metrics",
 )
 """What an evaluation worker runs; the key covers these and every package module they import."""
 
@@ -44,13 +44,13 @@ def _evaluation_sources() -> list[Path]:
     """The files of this package's modules an evaluation loads, and its data files, each named by
     its place in the package (a data file may be a link to the repository's ``config/``)."""
     for name in FLYING_MODULES:
-        importlib.import_module(f"{__package__}.{name}")
+        importlib.import_module(f"{PACKAGE.name}.{name}")
     files = {
         Path(m.__file__).resolve()
         for name, m in list(sys.modules.items())
-        if name.split(".")[0] == __package__ and getattr(m, "__file__", None)
+        if name.split(".")[0] == PACKAGE.name and getattr(m, "__file__", None)
     }
-    files |= {p for p in (PACKAGE_DIR / "data").rglob("*") if p.is_file()}
+    files |= {p for p in (PACKAGE / "data").rglob("*") if p.is_file()}
     return sorted(files)
 
 
@@ -66,7 +66,7 @@ def entry_key(model: Path, env: str, eval_set: Path | None, acting: str) -> str:
     h.update(acting.encode() + b"\0")
     h.update(" ".join(version(lib) for lib in LIBRARIES).encode())
     for source in _evaluation_sources():
-        h.update(str(source.relative_to(PACKAGE_DIR)).encode())
+        h.update(str(source.relative_to(PACKAGE)).encode())
         h.update(source.read_bytes())
     return h.hexdigest()[:32]
 

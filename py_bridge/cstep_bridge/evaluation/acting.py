@@ -27,6 +27,10 @@ from __future__ import annotations
 from collections.abc import Callable
 
 import numpy as np
+import torch
+from scipy.special import ndtri
+
+from ..errors import ConfigError
 
 ACTING_RULES = ("mode", "mean", "sample")
 """The rules a trained policy can act by (see the module docstring)."""
@@ -66,15 +70,11 @@ class SampledActor(Actor):
         self.steps = 0
 
     def start(self, episode: int) -> None:
-        import torch
-
         self.rng = torch.Generator().manual_seed(episode).get_state()
         self.noise = None
         self.steps = 0
 
     def _sample(self, obs: np.ndarray) -> np.ndarray:
-        import torch
-
         if self.rng is None:
             raise RuntimeError("SampledActor: start(episode) before the first action")
         policy = self.model.policy
@@ -106,7 +106,7 @@ class SampledActor(Actor):
 def check_rule(rule: str) -> str:
     """``rule`` if it is one of :data:`ACTING_RULES`; a clear error otherwise."""
     if rule not in ACTING_RULES:
-        raise ValueError(f"acting rule must be one of {ACTING_RULES}, not {rule!r}")
+        raise ConfigError(f"acting rule must be one of {ACTING_RULES}, not {rule!r}")
     return rule
 
 
@@ -123,9 +123,6 @@ def expected_action(policy, obs: np.ndarray) -> np.ndarray:
     """The expected action of SB3 actor-critic ``policy`` for one observation ``obs`` (not a
     batch), in the env's action units: ``E[tanh(X)]`` rescaled to the box for a squashed policy,
     ``E[clip(X)]`` otherwise, X ~ N(μ, s²) per component."""
-    import torch
-    from scipy.special import ndtri
-
     z = ndtri((np.arange(QUANTILES) + 0.5) / QUANTILES)
     with torch.no_grad():
         tensor, vectorized = policy.obs_to_tensor(obs)

@@ -23,6 +23,10 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+import torch
+from stable_baselines3.common.callbacks import BaseCallback
+
+from ..errors import ConfigError
 
 SAMPLE = 1024
 """Observations of the last rollout kept to measure the noise on."""
@@ -42,10 +46,10 @@ class NoiseCap:
             return None
         unknown = set(value) - {"start", "end"}
         if unknown:
-            raise ValueError(f"noise_cap: unknown keys {sorted(unknown)}")
+            raise ConfigError(f"noise_cap: unknown keys {sorted(unknown)}")
         cap = cls(float(value["start"]), float(value["end"]))
         if not 0 < cap.end <= cap.start:
-            raise ValueError(f"noise_cap: need 0 < end <= start, not {value}")
+            raise ConfigError(f"noise_cap: need 0 < end <= start, not {value}")
         return cap
 
     def at(self, progress: float) -> float:
@@ -57,8 +61,6 @@ def state_noise(policy, observations: np.ndarray):
     """SB3's own gSDE action distribution for each of ``observations`` (as the policy sees them):
     a torch ``Normal`` whose ``loc`` is the mean before squashing and whose ``scale`` is the std of
     the exploration noise, ``sqrt(Σ_j z_j(s)² σ_jk²)``, per action component."""
-    import torch
-
     with torch.no_grad():
         obs = torch.as_tensor(observations, dtype=torch.float32)
         return policy.get_distribution(obs).distribution
@@ -72,8 +74,6 @@ def noise_std(policy, observations: np.ndarray) -> np.ndarray:
 
 def _log_std_for(policy, std):
     """The ``log_std`` parameter that gives ``std`` (the inverse of SB3's expln or exp)."""
-    import torch
-
     if policy.action_dist.use_expln:  # expln(x) = exp(x) for x <= 0, log1p(x) + 1 above
         return torch.where(std <= 1.0, torch.log(std), torch.expm1(std - 1.0))
     return torch.log(std)
@@ -83,8 +83,6 @@ def apply_cap(policy, observations: np.ndarray, cap: float) -> np.ndarray:
     """Scales down the gSDE std of each action component whose noise on ``observations`` exceeds
     ``cap``; returns the noise std per component after the cap (each state's noise in a component
     scales with that component's σ column, so its median does too)."""
-    import torch
-
     measured = noise_std(policy, observations)
     scale = np.minimum(1.0, cap / np.maximum(measured, 1e-12))
     if np.all(scale >= 1.0):
@@ -98,14 +96,13 @@ def apply_cap(policy, observations: np.ndarray, cap: float) -> np.ndarray:
 
 def make_callback(cap: NoiseCap):
     """The SB3 callback that applies ``cap`` before each rollout and logs the noise."""
-    from stable_baselines3.common.callbacks import BaseCallback
 
     class CapNoise(BaseCallback):
         """See the module docstring."""
 
         def _on_training_start(self) -> None:
             if not self.model.use_sde:
-                raise ValueError("noise_cap needs use_sde (it caps gSDE's noise)")
+                raise ConfigError("noise_cap needs use_sde (it caps gSDE's noise)")
             self.kept: np.ndarray | None = None
 
         def _on_rollout_start(self) -> None:

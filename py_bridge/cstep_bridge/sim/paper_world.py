@@ -9,10 +9,11 @@ simulation the agents fly in and the scans the scorer models cannot drift apart.
 from __future__ import annotations
 
 import json
-from pathlib import Path
 from typing import Any
 
-PAPER_WORLD_FILE = Path(__file__).resolve().parent / "data" / "paper_world.json"
+from ..resources import PACKAGE
+
+PAPER_WORLD_FILE = PACKAGE / "data" / "paper_world.json"
 """Where the package keeps the file."""
 
 PAPER_WORLD: dict[str, Any] = json.loads(PAPER_WORLD_FILE.read_text())

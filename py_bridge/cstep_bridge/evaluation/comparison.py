@@ -164,7 +164,7 @@ def metric_matrix(
 def metric_values(
     clear_x: float | None, thresholds: Sequence[float] = metrics.THRESHOLDS
 ) -> dict[str, Callable[[metrics.Episode], float | None]]:
-    """The per-episode value behind each metric of :mod:`cstep_bridge.metrics`, by name: the rates'
+    """The per-episode value behind each metric of :mod:`cstep_bridge.evaluation.metrics`, by name: the rates'
     0/1 outcomes, the clear time (when ``clear_x`` is given) and the time within each threshold."""
     out: dict[str, Callable[[metrics.Episode], float | None]] = {
         "success": lambda e: float(e.success),

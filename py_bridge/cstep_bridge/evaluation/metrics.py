@@ -26,7 +26,7 @@ import numpy as np
 
 THRESHOLDS = (0.1, 0.2, 0.3, 0.4, 0.5)
 """Distances (m) from an obstacle's surface that time near obstacles is reported at: the paper's
-(its time-decrease table, :mod:`~cstep_bridge.paper_results`)."""
+(its time-decrease table, :mod:`~cstep_bridge.evaluation.paper_results`)."""
 
 
 @dataclass

@@ -21,7 +21,7 @@ class PaperAgent:
     clear_time: float
     """Average time to clear the obstacle (s)."""
     decrease: tuple[float, ...] | None
-    """Decrease (%) in time within each of :data:`~cstep_bridge.metrics.THRESHOLDS` (0.1 … 0.5 m)
+    """Decrease (%) in time within each of :data:`~cstep_bridge.evaluation.metrics.THRESHOLDS` (0.1 … 0.5 m)
     of obstacles relative to the unempowered agent; None for the unempowered agent itself."""
 
 

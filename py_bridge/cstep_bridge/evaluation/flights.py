@@ -1,14 +1,15 @@
 """Flying trained models over an evaluation set: the episodes :mod:`~cstep_bridge.evaluate`
 tables, the validation of :mod:`~cstep_bridge.selection` and the analysis scripts measure.
 
-Every configuration is flown by one of :mod:`~cstep_bridge.acting`'s rules from
+Every configuration is flown by one of :mod:`~cstep_bridge.evaluation.acting`'s rules from
 ``reset(seed=index)`` (a sampling rule seeded by the index too), so an episode depends only on the
 model, its observation normaliser, the acting rule, the configuration and the code that flies it (this module, the envs,
-the simulation): what :mod:`~cstep_bridge.episode_cache` keys its entries on.
+the simulation): what :mod:`~cstep_bridge.evaluation.episode_cache` keys its entries on.
 """
 
 from __future__ import annotations
 
+import logging
 from concurrent.futures import Executor, ProcessPoolExecutor
 from contextlib import ExitStack
 from multiprocessing import get_context
@@ -16,11 +17,21 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import torch
+from stable_baselines3 import PPO
 
+from ..envs import make_env
+from ..errors import ConfigError
+from ..sim.maze_layout import configurations as maze_configurations
+from ..sim.maze_layout import route_taken
+from ..training.normalization import observation_normalizer
 from . import metrics
 from .acting import DEFAULT_ACTING_RULE, actor
-from .envs import make_env
 from .episode_cache import EpisodeCache, entry_key
+from .eval_set import DEFAULT_PATH, load
+
+logger = logging.getLogger(__name__)
+"""Where this module's messages go (on stdout under the command-line tools)."""
 
 CHUNK = 10
 """Episodes a worker flies per task: the grain at which a cached evaluation resumes."""
@@ -30,13 +41,9 @@ def configurations(env: str, eval_set: Path | None = None) -> list[Any]:
     """The environment's evaluation set, in order: the drone's committed 100 arenas (or those of
     ``eval_set``, a JSON file in the same format), the maze's 18 start × goal combinations."""
     if env == "drone":
-        from .eval_set import DEFAULT_PATH, load
-
         return load(eval_set or DEFAULT_PATH)
     if eval_set is not None:
-        raise ValueError("--eval-set: only the drone takes an evaluation set from a file")
-    from .maze import configurations as maze_configurations
-
+        raise ConfigError("--eval-set: only the drone takes an evaluation set from a file")
     return maze_configurations()
 
 
@@ -60,9 +67,7 @@ def fly_episodes(
     act = actor(model, acting)
     radius = env.unwrapped.robot_radius
     dt = env.unwrapped.control_period
-    route_taken = None
-    if env_name == "maze":
-        from .maze import route_taken
+    route = route_taken if env_name == "maze" else None
     episodes = []
     for i, config in zip(ids, configs, strict=True):
         obs, info = env.reset(seed=i, options=reset_options(env_name, config))
@@ -82,8 +87,8 @@ def fly_episodes(
             collision=bool(info["collision"]),
             config=i,
         )
-        if route_taken is not None:
-            episode.extra["route"] = route_taken(episode.xy)
+        if route is not None:
+            episode.extra["route"] = route(episode.xy)
         episodes.append(episode)
     return episodes
 
@@ -98,11 +103,6 @@ def fly_saved(
     """Flies ``configs`` (numbered ``ids``) with the model saved at ``model_path`` — on the CPU, one
     thread, through the normaliser saved beside it — under the ``acting`` rule, in a fresh env
     (what a worker process of an evaluation or a re-selection runs)."""
-    import torch
-    from stable_baselines3 import PPO
-
-    from .normalization import observation_normalizer
-
     torch.set_num_threads(1)
     model = PPO.load(model_path, device="cpu")
     env = make_env(env_name, empowered=False)
@@ -138,15 +138,13 @@ def fly_model(
 ) -> list[metrics.Episode]:
     """Configurations ``indices`` flown by the model at ``model`` under the ``acting`` rule, over
     ``jobs`` worker processes (or the ``pool`` given, e.g. a
-    :class:`~cstep_bridge.ray_backend.RayPool`); with a ``cache``, only those it does not hold
+    :class:`~cstep_bridge.training.ray_backend.RayPool`); with a ``cache``, only those it does not hold
     yet, each chunk of :data:`CHUNK` stored as soon as it is flown."""
     key = entry_key(model, env, eval_set, acting) if cache else ""
     done = cache.load(key) if cache else {}
     missing = [i for i in indices if i not in done]
     if cache and len(missing) < len(indices):
-        print(
-            f"  {len(indices) - len(missing)} of {len(indices)} episodes from the cache", flush=True
-        )
+        logger.info(f"  {len(indices) - len(missing)} of {len(indices)} episodes from the cache")
     if missing:
         chunks = [missing[i : i + CHUNK] for i in range(0, len(missing), CHUNK)]
         n = len(chunks)

@@ -36,6 +36,8 @@ LEARNING_TAGS = (
     "entropy_loss",
     "std",
 )
+from tensorboard.backend.event_processing.event_accumulator import EventAccumulator
+
 """SB3's ``train/`` scalars kept in ``learning.csv``: how well the critic predicts the returns
 (explained variance, value loss) and how far each update moves the policy."""
 
@@ -104,8 +106,6 @@ def read_tensorboard(tb_dir: Path) -> np.ndarray:
     TensorBoard logs, one folder per start of a resumed run), as rows of (steps, *tags) in step
     order; a tag an update did not log is NaN. A step logged twice (a resumed run flies again
     from its checkpoint) keeps its last value."""
-    from tensorboard.backend.event_processing.event_accumulator import EventAccumulator
-
     by_step: dict[int, dict[str, float]] = {}
     for events in sorted(Path(tb_dir).glob("*/events.out.tfevents.*")):
         acc = EventAccumulator(str(events), size_guidance={"scalars": 0})

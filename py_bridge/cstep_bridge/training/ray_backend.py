@@ -12,14 +12,15 @@ checkpoint, decided per run from its directory), which a plain task re-runs as t
 does; Tune's experiment restore would keep a second record of the same state, and its trials'
 directories and syncing are not the run directories and exports the evaluation reads.
 
-A task runs the local backend's pieces (:func:`~cstep_bridge.campaign.launch`,
-:func:`~cstep_bridge.campaign.finish`, :func:`~cstep_bridge.campaign.stop`) on the node Ray gives
+A task runs the local backend's pieces (:func:`~cstep_bridge.training.campaign.launch`,
+:func:`~cstep_bridge.training.campaign.finish`, :func:`~cstep_bridge.training.campaign.stop`) on the node Ray gives
 it, in the storage directory, which every node must mount at one path (see docs/python.md); the
 campaign on the machine that owns the plan keeps the order, the lock and the prints.
 """
 
 from __future__ import annotations
 
+import logging
 import os
 import time
 from collections.abc import Callable
@@ -27,17 +28,17 @@ from concurrent.futures import Executor, Future
 from pathlib import Path
 from typing import Any, Self
 
+from ..errors import RayUnavailable
 from .campaign import Plan, Run, finish, launch, stop, trainer_env
+
+logger = logging.getLogger(__name__)
+"""Where this module's messages go (on stdout under the command-line tools)."""
 
 CPUS_PER_RUN = 1
 """CPUs a training run (one lane: one trainer, one thread) or a chunk of flights asks Ray for."""
 
 WAIT_SECONDS = 1.0
 """How often a task checks its trainer: a cancel is noticed between two checks."""
-
-
-class RayUnavailable(RuntimeError):
-    """``--backend ray`` without Ray installed."""
 
 
 def _ray():
@@ -70,7 +71,7 @@ def _train_run(plan: Plan, run: Run) -> bool:
     """A Ray task: trains ``run`` (already prepared) on this node and exports it, recording the
     stretch with this node's host and Ray id; whether it is done and exported. A cancel (raised
     here as KeyboardInterrupt) stops the trainer, which resumes next time."""
-    import ray
+    import ray  # the ray extra: only a Ray task runs this
 
     node = ray.get_runtime_context().get_node_id()
     env = trainer_env(dict(os.environ))
@@ -85,7 +86,7 @@ def _train_run(plan: Plan, run: Run) -> bool:
 
 
 class RayLanes:
-    """The Ray backend of :func:`~cstep_bridge.campaign.run_campaign`: each run a task asking for
+    """The Ray backend of :func:`~cstep_bridge.training.campaign.run_campaign`: each run a task asking for
     :data:`CPUS_PER_RUN` CPUs, as many at a time as the (local or joined) Ray has CPUs for, so
     that they start in the plan's seed-major order. A context manager: leaving it disconnects
     (and stops a local Ray)."""
@@ -119,7 +120,7 @@ class RayLanes:
         try:
             return self.ray.get(ref)
         except self.ray.exceptions.RayError as err:
-            print(f"{run.name}: its Ray task failed: {err}", flush=True)
+            logger.info(f"{run.name}: its Ray task failed: {err}")
             return False
 
     def stop(self, run: Run, ref) -> None:
@@ -132,7 +133,7 @@ class RayLanes:
 
 
 class RayPool(Executor):
-    """An executor of Ray tasks (one CPU each), for :func:`~cstep_bridge.flights.fly_model`:
+    """An executor of Ray tasks (one CPU each), for :func:`~cstep_bridge.evaluation.flights.fly_model`:
     the evaluation's chunks of episodes flown across a local Ray or a cluster instead of local
     processes. Paths among a task's arguments are made absolute here, as a cluster's workers
     start elsewhere. Shutting it down disconnects (and stops a local Ray)."""

@@ -5,7 +5,7 @@ argument names (``n_timesteps``, ``n_envs``, ``n_steps``, ``learning_rate`` as a
 ``lin_<value>`` for a linear decay to 0, ``normalize``, ``policy_kwargs``, ...). Two differences
 from rl-zoo, on purpose: ``policy_kwargs`` and ``normalize`` are YAML mappings rather than Python
 source to ``eval``, and four keys are ours: ``collision_value`` (what a collision is worth, see
-:mod:`~cstep_bridge.collision`), ``curriculum`` (see :mod:`~cstep_bridge.curriculum`) and
+:mod:`~cstep_bridge.reward.collision`), ``curriculum`` (see :mod:`~cstep_bridge.training.curriculum`) and
 ``validation`` (see :mod:`~cstep_bridge.selection`) and ``observation`` (the encoding the policy
 sees, see :mod:`~cstep_bridge.observation`).
 
@@ -19,8 +19,9 @@ from typing import Any
 
 import yaml
 
-from .collision import COLLISION_VALUES
-from .resources import PACKAGE
+from ..errors import ConfigError
+from ..resources import PACKAGE
+from ..reward.collision import COLLISION_VALUES
 
 HYPERPARAMS = PACKAGE / "hyperparams"
 PROTOCOLS = ("paper", "tuned")
@@ -98,14 +99,14 @@ def load(name: str, env: str) -> dict[str, Any]:
     """Section ``env`` of protocol ``name``, with every key present (defaults filled in)."""
     path = HYPERPARAMS / f"{name}.yml"
     if not path.exists():
-        raise ValueError(f"no protocol {name!r} (expected {path}); choose one of {PROTOCOLS}")
+        raise ConfigError(f"no protocol {name!r} (expected {path}); choose one of {PROTOCOLS}")
     doc = yaml.safe_load(path.read_text()) or {}
     if env not in doc:
-        raise ValueError(f"{path}: no section for env {env!r}")
+        raise ConfigError(f"{path}: no section for env {env!r}")
     section = dict(doc[env])
     unknown = set(section) - set(_DEFAULTS)
     if unknown:
-        raise ValueError(f"{path} [{env}]: unknown keys {sorted(unknown)}")
+        raise ConfigError(f"{path} [{env}]: unknown keys {sorted(unknown)}")
     return {**_DEFAULTS, **section}
 
 
@@ -114,11 +115,11 @@ def settings(hyper: dict[str, Any]) -> dict[str, Any]:
     policy = dict(hyper["policy_kwargs"] or {})
     unknown = set(policy) - _POLICY_KEYS
     if unknown:
-        raise ValueError(f"policy_kwargs: unknown keys {sorted(unknown)}")
+        raise ConfigError(f"policy_kwargs: unknown keys {sorted(unknown)}")
     net = policy.get("net_arch", [64, 64])
     if isinstance(net, dict):  # {pi: [...], vf: [...]}: the same for both here
         if net.get("pi") != net.get("vf"):
-            raise ValueError(f"policy_kwargs.net_arch: pi and vf must agree, not {net}")
+            raise ConfigError(f"policy_kwargs.net_arch: pi and vf must agree, not {net}")
         net = net["pi"]
     normalize = hyper["normalize"]
     if isinstance(normalize, bool):
@@ -160,28 +161,28 @@ def settings(hyper: dict[str, Any]) -> dict[str, Any]:
 def check(s: dict[str, Any]) -> None:
     """Raises ValueError naming the first setting that no run could use."""
     if s["activation"] not in ACTIVATIONS:
-        raise ValueError(f"activation_fn must be one of {ACTIVATIONS}, not {s['activation']!r}")
+        raise ConfigError(f"activation_fn must be one of {ACTIVATIONS}, not {s['activation']!r}")
     if s["collision_value"] not in COLLISION_VALUES:
-        raise ValueError(
+        raise ConfigError(
             f"collision_value must be one of {COLLISION_VALUES}, not {s['collision_value']!r}"
         )
     for name in ("squash_output", "use_expln"):
         if s.get(name) and not s["use_sde"]:
-            raise ValueError(f"policy_kwargs.{name} needs use_sde (SB3 has it for gSDE only)")
+            raise ConfigError(f"policy_kwargs.{name} needs use_sde (SB3 has it for gSDE only)")
     if s.get("sde_learn_features") and not s["use_sde"]:
-        raise ValueError("sde_learn_features needs use_sde (it trains gSDE's noise features)")
+        raise ConfigError("sde_learn_features needs use_sde (it trains gSDE's noise features)")
     if s.get("noise_cap") and not s["use_sde"]:
-        raise ValueError("noise_cap needs use_sde (it caps gSDE's exploration noise)")
+        raise ConfigError("noise_cap needs use_sde (it caps gSDE's exploration noise)")
     if s["lr_schedule"] not in ("constant", "linear"):
-        raise ValueError(f"lr_schedule must be constant or linear, not {s['lr_schedule']!r}")
+        raise ConfigError(f"lr_schedule must be constant or linear, not {s['lr_schedule']!r}")
     for name in ("learning_rate", "n_steps", "batch_size", "n_epochs", "clip_range"):
         if not s[name] > 0:
-            raise ValueError(f"{name} must be > 0, not {s[name]}")
+            raise ConfigError(f"{name} must be > 0, not {s[name]}")
     for name in ("gamma", "gae_lambda"):
         if not 0 < s[name] <= 1:
-            raise ValueError(f"{name} must be in (0, 1], not {s[name]}")
+            raise ConfigError(f"{name} must be in (0, 1], not {s[name]}")
     if not s["net"] or min(s["net"]) <= 0:
-        raise ValueError(f"net_arch must be positive layer sizes, not {s['net']}")
+        raise ConfigError(f"net_arch must be positive layer sizes, not {s['net']}")
 
 
 def _learning_rate(value: Any) -> tuple[float, str]:
@@ -196,7 +197,7 @@ def parse_override(text: str) -> tuple[str, Any]:
     ``policy_kwargs={net_arch: [64, 64]}``), for ``--hyperparams``."""
     key, sep, value = text.partition("=")
     if not sep or not key:
-        raise ValueError(f"expected KEY=VALUE, not {text!r}")
+        raise ConfigError(f"expected KEY=VALUE, not {text!r}")
     if key not in _DEFAULTS:
-        raise ValueError(f"unknown hyperparameter {key!r}: one of {sorted(_DEFAULTS)}")
+        raise ConfigError(f"unknown hyperparameter {key!r}: one of {sorted(_DEFAULTS)}")
     return key, yaml.safe_load(value)

@@ -1,11 +1,11 @@
 """N empowered envs and one batch of rewards per vector step: one `cstep node` service round
 trip, or one call of the in-process scorer.
 
-An empowered env in ``reward_mode="deferred"`` (:mod:`~cstep_bridge.env`) steps its simulation
-and leaves what the node needs, a :class:`~cstep_bridge.env.RewardRequest`, in its ``info``.
+An empowered env in ``reward_mode="deferred"`` (:mod:`~cstep_bridge.envs.drone`) steps its simulation
+and leaves what the node needs, a :class:`~cstep_bridge.envs.drone.RewardRequest`, in its ``info``.
 :class:`BatchedReward` wraps a vector of such envs (DummyVecEnv or SubprocVecEnv): after each
 vector step it sends every env's request to one node in one ``/cstep/evaluate_batch`` call
-(several calls beyond :data:`~cstep_bridge.ros_io.STATES_PER_CALL`, 32, envs), which the node
+(several calls beyond :data:`~cstep_bridge.ros.bridge.STATES_PER_CALL`, 32, envs), which the node
 scores in parallel, and fills in the rewards. Each env gets exactly the reward it would get from
 a node of its own (the same numbers, bit for bit), for one round trip instead of N and one node
 process instead of N, and with no ``/odom``, ``/scan``, ``/clock`` traffic for observers.
@@ -19,7 +19,7 @@ and its DDS threads; those wake-ups, more than the node's ~0.4 ms evaluation, ar
 the topics and sending one request per vector step save.
 
 With the envs' ``reward_source="inprocess"`` the wrapper asks no node: it scores the vector step
-with one :meth:`~cstep_bridge.scoring.Scorer.score_batch` call in this process (the same scoring
+with one :meth:`~cstep_bridge.reward.scoring.Scorer.score_batch` call in this process (the same scoring
 function the node calls, so the same numbers), with neither a DDS round trip nor a private domain
 to find first.
 
@@ -39,17 +39,18 @@ from stable_baselines3.common.monitor import ResultsWriter
 from stable_baselines3.common.vec_env import DummyVecEnv, VecEnv, VecEnvWrapper, VecMonitor
 from stable_baselines3.common.vec_env.base_vec_env import VecEnvStepReturn
 
-from .env import REWARD_REQUEST
+from ..envs.drone import REWARD_REQUEST
+from ..errors import ConfigError
 
 
 class BatchedReward(VecEnvWrapper):
     """Fills the rewards of a vector of deferred empowered envs from one node, or in process,
     batched per step.
 
-    ``bridge``: a service-mode :class:`~cstep_bridge.ros_io.RosBridge` to use (not closed here);
+    ``bridge``: a service-mode :class:`~cstep_bridge.ros.bridge.RosBridge` to use (not closed here);
     None starts one, and its private node, with the envs' own bridge arguments (they must agree:
     one node scores them all), without the simulation topics. Envs with
-    ``reward_source="inprocess"`` are scored by one :class:`~cstep_bridge.scoring.Scorer` of
+    ``reward_source="inprocess"`` are scored by one :class:`~cstep_bridge.reward.scoring.Scorer` of
     those arguments instead, and take no bridge.
     """
 
@@ -59,26 +60,26 @@ class BatchedReward(VecEnvWrapper):
         super().__init__(venv)
         modes = set(venv.get_attr("reward_mode"))
         if modes != {"deferred"} or not all(venv.get_attr("empowered")):
-            raise ValueError(
+            raise ConfigError(
                 "BatchedReward needs empowered envs with reward_mode='deferred', "
                 f"got reward modes {sorted(modes)}"
             )
         args = venv.get_attr("bridge_args")
         if any(a != args[0] for a in args):
-            raise ValueError(f"the envs would need different nodes: {args}")
+            raise ConfigError(f"the envs would need different nodes: {args}")
         sources = set(venv.get_attr("reward_source"))
         if len(sources) != 1:
-            raise ValueError(f"the envs take their rewards from different sources: {sources}")
+            raise ConfigError(f"the envs take their rewards from different sources: {sources}")
         self.scorer = None
         if sources == {"inprocess"}:
             if bridge is not None:
-                raise ValueError("envs with reward_source='inprocess' take no bridge")
-            from .scoring import bridge_scorer
+                raise ConfigError("envs with reward_source='inprocess' take no bridge")
+            from ..reward.scoring import bridge_scorer  # the extension, only when used
 
             self.scorer = bridge_scorer(args[0]["safety_coefficient"], args[0]["node_params"])
         self._own_bridge = bridge is None and self.scorer is None
         if self._own_bridge:
-            from .ros_io import RosBridge
+            from ..ros.bridge import RosBridge  # rclpy, only when a node scores
 
             bridge = RosBridge(**{**args[0], "mode": "service", "publish_sim_topics": False})
         self.bridge = bridge
@@ -97,7 +98,7 @@ class BatchedReward(VecEnvWrapper):
         except KeyError:
             raise RuntimeError(f"an env returned no {REWARD_REQUEST!r} in its info") from None
         if self.scorer is not None:
-            from .scoring import score_requests
+            from ..reward.scoring import score_requests  # the extension, only when used
 
             answers = score_requests(self.scorer, requests)
         else:

@@ -3,13 +3,17 @@ the empowered agent a real `cstep node` over real DDS (on a private domain, shar
 
 import dataclasses
 import json
+import os
 import pickle
 import shutil
+import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
 import torch
+from conftest import REPO
 from cstep_bridge.envs import make_env
 from cstep_bridge.evaluation.evaluate import Agent, group_seeds
 from cstep_bridge.training import training_log
@@ -321,6 +325,33 @@ def test_evaluation_cache_flies_only_the_episodes_it_lacks(drone_run, tmp_path):
     assert "from the cache" not in proc.stdout and "acting by its mean" in proc.stdout
     assert json.loads((tmp_path / "d" / "results.json").read_text())["action"] == "mean"
     assert len(list(cache.glob("*.pkl"))) == 3
+
+
+def test_an_evaluation_cache_key_does_not_depend_on_what_the_process_imported(tmp_path):
+    """`python -m cstep_bridge.evaluate` runs its module as __main__; a library caller imports
+    it, and maybe the bag recorder. The key covered whatever the process held, so the same model
+    missed the entry a CLI run had stored."""
+    script = (
+        "import importlib, sys\n"
+        "from pathlib import Path\n"
+        "for name in sys.argv[2:]: importlib.import_module(name)\n"
+        "from cstep_bridge.evaluation.episode_cache import entry_key\n"
+        "print(entry_key(Path(sys.argv[1]), 'drone', None, 'mode'))\n"
+    )
+    model = tmp_path / "model.zip"
+    model.write_bytes(b"weights")
+    keys = {
+        subprocess.run(
+            [sys.executable, "-c", script, str(model), *imports],
+            capture_output=True,
+            text=True,
+            check=True,
+            cwd=REPO,
+            env=dict(os.environ, PYTHONPATH=str(REPO / "py_bridge")),
+        ).stdout
+        for imports in ([], ["cstep_bridge.evaluation.evaluate", "cstep_bridge.ros.bag"])
+    }
+    assert len(keys) == 1 and len(keys.pop().strip()) == 32
 
 
 def test_a_finished_run_is_selected_again_by_another_rule_set_or_span(drone_run, tmp_path):

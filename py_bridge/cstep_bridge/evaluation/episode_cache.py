@@ -13,10 +13,9 @@ directory of the user's own files, not a format to exchange.
 
 from __future__ import annotations
 
+import ast
 import hashlib
-import importlib
 import pickle
-import sys
 from importlib.metadata import version
 from pathlib import Path
 
@@ -40,16 +39,57 @@ FLYING_MODULES = (
 """What an evaluation worker runs; the key covers these and every package module they import."""
 
 
+def _module_file(name: str) -> Path | None:
+    """The source of package module ``name`` (dotted, relative to the package), if it is one."""
+    base = PACKAGE.joinpath(*name.split(".")) if name else PACKAGE
+    for path in (base.with_suffix(".py"), base / "__init__.py"):
+        if path.is_file():
+            return path
+    return None
+
+
+def _package_imports(name: str, source: Path) -> set[str]:
+    """The package modules (dotted, relative to the package) that module ``name`` imports,
+    at its top or inside a function, with the packages above each."""
+    found = set()
+    package = name if source.name == "__init__.py" else name.rpartition(".")[0]
+    for node in ast.walk(ast.parse(source.read_text(), str(source))):
+        if isinstance(node, ast.ImportFrom):
+            if node.level:
+                parts = package.split(".") if package else []
+                parts = parts[: len(parts) - node.level + 1] + (node.module or "").split(".")
+                target = ".".join(p for p in parts if p)
+            elif (node.module or "").split(".")[0] == PACKAGE.name:
+                target = node.module.partition(".")[2]
+            else:
+                continue
+            found.add(target)
+            found |= {f"{target}.{a.name}".lstrip(".") for a in node.names}
+        elif isinstance(node, ast.Import):
+            found |= {
+                a.name.partition(".")[2] for a in node.names if a.name.startswith(PACKAGE.name)
+            }
+    modules = set()
+    for target in found:
+        parts = target.split(".") if target else []
+        modules |= {".".join(parts[:i]) for i in range(len(parts) + 1)}
+    return {m for m in modules if _module_file(m)}
+
+
 def _evaluation_sources() -> list[Path]:
     """The files of this package's modules an evaluation loads, and its data files, each named by
-    its place in the package (a data file may be a link to the repository's ``config/``)."""
-    for name in FLYING_MODULES:
-        importlib.import_module(f"{PACKAGE.name}.{name}")
-    files = {
-        Path(m.__file__).resolve()
-        for name, m in list(sys.modules.items())
-        if name.split(".")[0] == PACKAGE.name and getattr(m, "__file__", None)
-    }
+    its place in the package (a data file may be a link to the repository's ``config/``).
+
+    The modules are found by reading their imports, not by importing them: which modules a
+    process happens to hold depends on its caller (``python -m`` runs its module as
+    ``__main__``), and the key must not. Written by hand: ``modulefinder`` would also walk every
+    third-party import (PyTorch alone takes minutes), which the library versions cover."""
+    todo, seen = {""} | set(FLYING_MODULES), set()
+    while todo:
+        name = todo.pop()
+        seen.add(name)
+        todo |= _package_imports(name, _module_file(name)) - seen
+    files = {_module_file(name).resolve() for name in seen}
     files |= {p for p in (PACKAGE / "data").rglob("*") if p.is_file()}
     return sorted(files)
 

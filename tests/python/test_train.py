@@ -290,6 +290,17 @@ def test_the_rollout_line_reports_the_share_of_clipped_actions(log_std, low, hig
     assert low <= clipped <= high, line
 
 
+def test_a_run_resumed_without_its_episode_log_starts_a_readable_one(drone_run, tmp_path):
+    """A checkpoint committed without its run's monitor/ resumed into a log with no header, and
+    the run died at its end drawing the training curve (SB3 #2282)."""
+    run_dir = tmp_path / "run"
+    shutil.copytree(drone_run, run_dir)
+    shutil.rmtree(run_dir / "monitor")
+    run("train", "--resume", "--timesteps", "1024", "--out", str(run_dir), "--no-progress")
+    assert (run_dir / "training.png").is_file()
+    assert len(training_log.read_monitor(run_dir / "monitor")) > 0
+
+
 def test_evaluation_cache_flies_only_the_episodes_it_lacks(drone_run, tmp_path):
     cache = tmp_path / "cache"
     model = ["--model", str(drone_run)]

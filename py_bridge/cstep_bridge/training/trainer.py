@@ -493,8 +493,12 @@ def train(args: argparse.Namespace) -> Path:
 
     (out / "checkpoints").mkdir(exist_ok=True)
     torch.set_num_threads(args.torch_threads)
+    # Append to the episode log on resume, but only to one that is there: SB3's Monitor appends
+    # to a new file without its header (DLR-RM/stable-baselines3#2282), which the curve at the
+    # end cannot read, e.g. when a checkpoint travelled without its run's monitor/.
+    appending = args.resume and any((out / "monitor").glob("*.monitor.csv"))
     vec_env = training_vec_env(
-        config, args.n_envs, args.vec_env, out / "monitor", override_existing=not args.resume
+        config, args.n_envs, args.vec_env, out / "monitor", override_existing=not appending
     )
     if config.norm_obs or config.norm_reward:
         stats = stats_path(resume_from) if resume_from is not None else None

@@ -1,8 +1,8 @@
-"""cstep_bridge: a PyBullet drone and point maze over rclpy, with the C-STEP empowered reward from
-`cstep node`.
+"""cstep_bridge: a PyBullet drone, point maze and Husky over rclpy, with the C-STEP empowered
+reward from `cstep node`.
 
 Subpackages: :mod:`~cstep_bridge.sim` (the PyBullet worlds: the drone arena, the maze's layout and
-ball), :mod:`~cstep_bridge.envs` (the Gymnasium environments, by name and by Gymnasium id),
+ball, the Husky's hall), :mod:`~cstep_bridge.envs` (the Gymnasium environments, by name and by Gymnasium id),
 :mod:`~cstep_bridge.reward` (the task reward, collisions, C-STEP scored in process),
 :mod:`~cstep_bridge.ros` (the rclpy bridge to a `cstep node`, bags), :mod:`~cstep_bridge.training`
 and :mod:`~cstep_bridge.evaluation` (the ``train`` extra). Beside them: :mod:`~cstep_bridge.errors`
@@ -13,7 +13,8 @@ goal encoding, at the path committed models' pickles name) and the command-line 
 ``selection``, ``eval_set`` and ``bag``. :mod:`cstep_bridge.env` is the drone env's documented
 path.
 
-Importing the package registers ``cstep/Drone-v0`` and ``cstep/PointMaze-v0`` with Gymnasium.
+Importing the package registers ``cstep/Drone-v0``, ``cstep/PointMaze-v0`` and ``cstep/Husky-v0``
+with Gymnasium.
 """
 
 from .envs import register_envs

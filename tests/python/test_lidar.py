@@ -1,5 +1,6 @@
 """The LiDAR's slab-test ray casting against PyBullet's own ray test (rayTestBatch) over the same
-bodies, on random poses in both worlds: the two must agree beam for beam, to Bullet's own
+bodies, on random poses in every world (the Husky's hall with its own 360-beam 10 m scanner):
+the two must agree beam for beam, to Bullet's own
 precision (measured over 180 000 beams: 99.9 % agree to 1e-13 m, one in 10 000 is off by
 0.8–1.7 mm, where Bullet's convex cast stops short).
 
@@ -13,24 +14,26 @@ import numpy as np
 import pybullet as p
 import pytest
 from cstep_bridge.sim.drone import Arena, DroneSim
+from cstep_bridge.sim.husky import BOUNDS, HALL_LIDAR, Hall, HuskySim
 from cstep_bridge.sim.maze import MazeSim
 from cstep_bridge.sim.maze_layout import LAYOUT
-from cstep_bridge.sim.world import LIDAR_ANGLE_INCREMENT, LIDAR_ANGLE_MIN, LIDAR_BEAMS, LIDAR_RANGE
+from cstep_bridge.sim.world import PAPER_LIDAR, Lidar
 
 
-def pybullet_scan(client: int, position: np.ndarray, yaw: float, r0: float) -> np.ndarray:
+def pybullet_scan(
+    client: int, position: np.ndarray, yaw: float, r0: float, lidar: Lidar = PAPER_LIDAR
+) -> np.ndarray:
     """The scan as PyBullet's ray test sees the world (the bodies the sim created)."""
-    angles = LIDAR_ANGLE_MIN + LIDAR_ANGLE_INCREMENT * np.arange(LIDAR_BEAMS) + yaw
-    dirs = np.column_stack([np.cos(angles), np.sin(angles), np.zeros(LIDAR_BEAMS)])
+    angles = lidar.bearings + yaw
+    dirs = np.column_stack([np.cos(angles), np.sin(angles), np.zeros(lidar.beams)])
+    reach = lidar.range_max
     hits = p.rayTestBatch(
-        (position + r0 * dirs).tolist(),
-        (position + LIDAR_RANGE * dirs).tolist(),
-        physicsClientId=client,
+        (position + r0 * dirs).tolist(), (position + reach * dirs).tolist(), physicsClientId=client
     )
-    ranges = np.full(LIDAR_BEAMS, np.inf)
+    ranges = np.full(lidar.beams, np.inf)
     for i, hit in enumerate(hits):
         if hit[0] >= 0:
-            ranges[i] = r0 + hit[2] * (LIDAR_RANGE - r0)
+            ranges[i] = r0 + hit[2] * (reach - r0)
     return ranges
 
 
@@ -38,14 +41,16 @@ EDGE = 0.015
 """Beams passing closer than this (m) to a box's vertical edge are not compared."""
 
 
-def near_an_edge(boxes: np.ndarray, position: np.ndarray, yaw: float, r0: float) -> np.ndarray:
+def near_an_edge(
+    boxes: np.ndarray, position: np.ndarray, yaw: float, r0: float, lidar: Lidar = PAPER_LIDAR
+) -> np.ndarray:
     """Per beam: whether its segment passes within EDGE of a vertical box edge (in the plane)."""
-    angles = LIDAR_ANGLE_MIN + LIDAR_ANGLE_INCREMENT * np.arange(LIDAR_BEAMS) + yaw
+    angles = lidar.bearings + yaw
     dirs = np.column_stack([np.cos(angles), np.sin(angles)])
     xs, ys = boxes[:, [0, 3]], boxes[:, [1, 4]]
     corners = np.stack(np.broadcast_arrays(xs[:, :, None], ys[:, None, :]), -1).reshape(-1, 2)
     rel = corners - position[:2]  # (corners, 2)
-    along = np.clip(dirs @ rel.T, r0, LIDAR_RANGE)  # (beams, corners)
+    along = np.clip(dirs @ rel.T, r0, lidar.range_max)  # (beams, corners)
     gap = np.linalg.norm(rel[None] - along[..., None] * dirs[:, None], axis=-1)
     return gap.min(axis=1) < EDGE
 
@@ -98,6 +103,32 @@ def test_the_maze_scan_matches_pybullets_ray_test_on_random_poses():
             skip = near_an_edge(sim.boxes, pos, 0.0, 0.11)
             agree(ours, pybullet_scan(sim.client, pos, 0.0, 0.11), skip)
             checked += 1
+    finally:
+        sim.close()
+
+
+def test_the_husky_hall_scan_matches_pybullets_ray_test_on_random_poses():
+    """The hall's walls and pallets seen by the Husky's 360-beam 10 m scanner, in the plane of
+    its chassis's top (the robot itself removed: the scan never sees it)."""
+    rng = np.random.default_rng(3)
+    sim = HuskySim()
+    try:
+        p.removeBody(sim.robot, physicsClientId=sim.client)
+        x0, y0, x1, y1 = BOUNDS
+        r0 = HALL_LIDAR.range_min
+        hits = compared = skipped = 0
+        for _ in range(30):
+            pos = np.array([rng.uniform(x0, x1), rng.uniform(y0, y1), sim.params.chassis_top])
+            if Hall.clearance(pos[:2]) < 0.3:
+                continue  # closer than the Husky's half-width: not a pose it can be in
+            yaw = rng.uniform(-np.pi, np.pi)
+            ours = sim.lidar(pos, yaw, r0, HALL_LIDAR)
+            skip = near_an_edge(sim.boxes, pos, yaw, r0, HALL_LIDAR)
+            compared += agree(ours, pybullet_scan(sim.client, pos, yaw, r0, HALL_LIDAR), skip)
+            skipped += skip.sum()
+            hits += np.isfinite(ours).sum()
+        assert hits > 0.95 * compared  # a closed hall: only far corners lie beyond 10 m
+        assert skipped < 0.05 * compared
     finally:
         sim.close()
 

@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from cstep_bridge.resources import PACKAGE
 from cstep_bridge.reward.task import task_reward
 from cstep_bridge.sim import world
 from cstep_bridge.sim.drone import Arena
@@ -49,16 +50,21 @@ def test_the_simulation_builds_its_arena_and_lidar_from_the_file():
 
 
 def test_a_built_wheel_carries_the_files_contents(tmp_path):
-    """The package's copy is a link to config/: a wheel must hold the file itself."""
+    """The package's copies of config/'s worlds (the paper's, the Husky's hall) are links to
+    them: a wheel must hold the files themselves."""
     subprocess.run(
         [sys.executable, "-m", "pip", "wheel", "--no-deps", "--no-build-isolation", "-q",
          "-w", str(tmp_path), str(REPO / "py_bridge")],
         check=True,
     )  # fmt: skip
     (wheel,) = tmp_path.glob("cstep_bridge-*.whl")
+    links = sorted(p for p in (PACKAGE / "data").iterdir() if p.is_symlink())
+    assert {p.name for p in links} >= {"paper_world.json", "husky_hall.json"}
     with zipfile.ZipFile(wheel) as z:
-        packed = json.loads(z.read("cstep_bridge/data/paper_world.json"))
-    assert packed == PAPER_WORLD
+        packed = {p.name: json.loads(z.read(f"cstep_bridge/data/{p.name}")) for p in links}
+    assert packed["paper_world.json"] == PAPER_WORLD
+    for link in links:
+        assert packed[link.name] == json.loads(link.read_text()), link.name
 
 
 def test_the_task_reward_is_the_scorers():

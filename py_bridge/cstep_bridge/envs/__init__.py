@@ -1,11 +1,12 @@
 """The environments by name, so the trainer, the evaluation and Gymnasium build them the same way.
 
-``drone`` is :class:`~cstep_bridge.envs.drone.CStepDroneEnv` (the paper's PyBullet drone arena) and
-``maze`` is :class:`~cstep_bridge.envs.maze.CStepMazeEnv` (the paper's point maze). Each module is
-imported only when its environment is asked for.
+``drone`` is :class:`~cstep_bridge.envs.drone.CStepDroneEnv` (the paper's PyBullet drone arena),
+``maze`` is :class:`~cstep_bridge.envs.maze.CStepMazeEnv` (the paper's point maze) and ``husky``
+is :class:`~cstep_bridge.envs.husky.CStepHuskyEnv` (a Clearpath Husky driving a hall through a
+door between pallets). Each module is imported only when its environment is asked for.
 
-Gymnasium knows them as ``cstep/Drone-v0`` and ``cstep/PointMaze-v0`` (namespace ``cstep``):
-importing :mod:`cstep_bridge` registers both, as Gymnasium 1.x plugins do (ale_py,
+Gymnasium knows them as ``cstep/Drone-v0``, ``cstep/PointMaze-v0`` and ``cstep/Husky-v0``
+(namespace ``cstep``): importing :mod:`cstep_bridge` registers them, as Gymnasium 1.x plugins do (ale_py,
 gymnasium_robotics), so ``gymnasium.make("cstep/Drone-v0", empowered=True,
 safety_coefficient=0.5)`` passes its keyword arguments to the constructor.
 """
@@ -34,6 +35,7 @@ class EnvEntry:
 ENVS = {
     "drone": EnvEntry("cstep/Drone-v0", "cstep_bridge.env:CStepDroneEnv"),
     "maze": EnvEntry("cstep/PointMaze-v0", "cstep_bridge.envs.maze:CStepMazeEnv"),
+    "husky": EnvEntry("cstep/Husky-v0", "cstep_bridge.envs.husky:CStepHuskyEnv"),
 }
 """Every environment by the name the command-line tools take."""
 

@@ -14,7 +14,8 @@ min_obstacle_distance (centre to nearest wall or block face, m), distance_to_goa
 (x, y, m).
 
 :class:`EmpoweredRewardEnv` holds what this env shares with the point maze
-(:mod:`~cstep_bridge.envs.maze`): the choice of reward and the bridge to the node.
+(:mod:`~cstep_bridge.envs.maze`) and the Husky (:mod:`~cstep_bridge.envs.husky`): the choice of
+reward and the bridge to the node, the observation and action boxes, the step's bookkeeping.
 
 An empowered env gets its reward from one of two ``reward_source`` s, the same scoring function
 either way and the same answers, bit for bit: ``"node"`` (default), a ``cstep node`` over ROS,
@@ -46,7 +47,7 @@ from ..errors import ConfigError
 from ..reward.collision import COLLISION_VALUES, held_return
 from ..reward.task import task_reward
 from ..sim.drone import CONTROL_HZ, Arena, DroneSim, DroneState
-from ..sim.world import LIDAR_BEAMS, LIDAR_RANGE, clipped_ranges
+from ..sim.world import PAPER_LIDAR, Lidar, clipped_ranges
 from ..training.curriculum import training_endpoints, training_fraction
 
 MAX_TILT = 0.9
@@ -112,7 +113,8 @@ class EmpoweredRewardEnv(gym.Env):
     overriding the node's parameters, on first use — except in ``reward_mode="deferred"``,
     where it asks no node, and with ``reward_source="inprocess"``, where it scores with a
     :class:`~cstep_bridge.reward.scoring.Scorer` of the same parameters instead (see the module
-    docstring).
+    docstring). ``lidar``: the layout of the robot's scans (the paper's scanner unless the
+    robot carries another).
     """
 
     def __init__(
@@ -120,19 +122,21 @@ class EmpoweredRewardEnv(gym.Env):
         empowered: bool,
         safety_coefficient: float,
         *,
-        bridge,
-        reward_mode: str,
-        domain_id: int | None,
-        reward_timeout: float,
+        bridge=None,
+        reward_mode: str = "service",
+        domain_id: int | None = None,
+        reward_timeout: float = 5.0,
         node_params: dict[str, str] | None = None,
         collision_value: str = "none",
         gamma: float = 0.99,
         reward_source: str = "node",
+        lidar: Lidar = PAPER_LIDAR,
     ) -> None:
         """Checks ``safety_coefficient`` > 0, ``reward_source``, ``reward_mode`` and
         ``collision_value``, and keeps what starting a bridge or a scorer needs. ``collision_value`` and ``gamma``: what a collision is
         worth to an empowered agent (:mod:`~cstep_bridge.reward.collision`; ``gamma`` only discounts
-        the held floor, it should be the trainer's)."""
+        the held floor, it should be the trainer's). ``reward_timeout``: how long (s) to wait
+        for the node's answer."""
         super().__init__()
         if safety_coefficient <= 0:
             raise ConfigError(f"safety_coefficient must be > 0, not {safety_coefficient}")
@@ -159,6 +163,7 @@ class EmpoweredRewardEnv(gym.Env):
         self.safety_coefficient = float(safety_coefficient)
         self.reward_mode = reward_mode
         self.reward_source = reward_source
+        self.lidar = lidar
         self._bridge = bridge
         self._own_bridge = None
         self._scorer = None
@@ -168,6 +173,7 @@ class EmpoweredRewardEnv(gym.Env):
             "safety_coefficient": self.safety_coefficient,
             "timeout": reward_timeout,
             "node_params": node_params,
+            "lidar": lidar,
         }
         """The :class:`~cstep_bridge.ros.bridge.RosBridge` arguments of this env's own bridge (a
         batching wrapper starts one bridge, or in process one scorer, with them for all its
@@ -284,9 +290,46 @@ class EmpoweredRewardEnv(gym.Env):
         if self.reward_source == "inprocess":
             from ..reward.scoring import score_requests  # the extension, only when used
 
-            return request.finish(score_requests(self.scorer, [request])[0], info)
+            answer = score_requests(self.scorer, [request], self.lidar)[0]
+            return request.finish(answer, info)
         answer = self.bridge.evaluate(state, ranges, t, in_collision=request.in_collision)
         return request.finish(answer, info)
+
+    def _declare_spaces(self, high: np.ndarray) -> None:
+        """The observation box — the leading values within ±``high``, then the scan's ranges in
+        [0, range] — and the action box [−1, 1]²; the episode's counters at zero."""
+        beams, reach = self.lidar.beams, self.lidar.range_max
+        self.observation_space = spaces.Box(
+            low=np.concatenate([-high, np.zeros(beams)]).astype(np.float32),
+            high=np.concatenate([high, np.full(beams, reach)]).astype(np.float32),
+            dtype=np.float32,
+        )
+        self.action_space = spaces.Box(-1.0, 1.0, shape=(2,), dtype=np.float32)
+        self.steps = 0
+        self.success = False
+
+    def _begin(self, state: DroneState) -> tuple[np.ndarray, dict[str, Any]]:
+        """Starts an episode at ``state``, where the simulation was just reset: the counters at
+        zero, the goal told to the bridge; the first observation and ``info``."""
+        self.steps = 0
+        self.success = False
+        self._share_goal(self.sim.goal)
+        return self._observe(state, self.sim.scan(state)), self._info(state, False)
+
+    def _in_box(self, obs: np.ndarray) -> np.ndarray:
+        """An observation clipped into the observation box, as float32."""
+        low, high = self.observation_space.low, self.observation_space.high
+        return np.clip(obs, low, high).astype(np.float32)
+
+    def _finish_step(self, state: DroneState, collision: bool, ended: bool = False):
+        """Counts the step to ``state`` (``collision``: the simulator saw contact) and returns
+        its observation, reward, terminated (a collision, or ``ended``), truncated (at
+        :attr:`max_steps`) and ``info``."""
+        self.steps += 1
+        ranges, reward, info = self._outcome(state, collision)
+        terminated = info["collision"] or ended
+        truncated = not terminated and self.steps >= self.max_steps
+        return self._observe(state, ranges), float(reward), terminated, truncated, info
 
     def render(self) -> np.ndarray | None:
         """``rgb_array``: the world seen from above as an RGB frame (height, width, 3), e.g. for
@@ -296,10 +339,11 @@ class EmpoweredRewardEnv(gym.Env):
         return None
 
     def close(self) -> None:
-        """Stops this env's own bridge and node, if it started them."""
+        """Stops this env's own bridge and node, if it started them, and the simulation."""
         if self._own_bridge is not None:
             self._own_bridge.close()
             self._own_bridge = None
+        self.sim.close()
 
 
 class CStepDroneEnv(EmpoweredRewardEnv):
@@ -347,17 +391,11 @@ class CStepDroneEnv(EmpoweredRewardEnv):
         self.render_mode = checked_render_mode(render_mode)
         self.sim = DroneSim(arena or Arena(), gui=render_mode == "human")
         self.robot_radius = self.sim.params.radius
-        high = np.concatenate(
-            [np.full(3, 10.0), np.full(3, 20.0), np.full(3, math.pi), np.full(3, 100.0)]
+        self._declare_spaces(
+            np.concatenate(
+                [np.full(3, 10.0), np.full(3, 20.0), np.full(3, math.pi), np.full(3, 100.0)]
+            )
         )
-        self.observation_space = spaces.Box(
-            low=np.concatenate([-high, np.zeros(LIDAR_BEAMS)]).astype(np.float32),
-            high=np.concatenate([high, np.full(LIDAR_BEAMS, LIDAR_RANGE)]).astype(np.float32),
-            dtype=np.float32,
-        )
-        self.action_space = spaces.Box(-1.0, 1.0, shape=(2,), dtype=np.float32)
-        self.steps = 0
-        self.success = False
 
     # --- helpers -------------------------------------------------------------------------
     def _observe(self, state: DroneState, ranges: np.ndarray) -> np.ndarray:
@@ -371,8 +409,7 @@ class CStepDroneEnv(EmpoweredRewardEnv):
                 clipped_ranges(ranges),
             ]
         )
-        low, high = self.observation_space.low, self.observation_space.high
-        return np.clip(obs, low, high).astype(np.float32)
+        return self._in_box(obs)
 
     # --- gymnasium API -------------------------------------------------------------------
     def reset(self, *, seed: int | None = None, options: dict | None = None):
@@ -386,12 +423,7 @@ class CStepDroneEnv(EmpoweredRewardEnv):
             arena = dataclasses.replace(arena, start=start, goal=goal)
         if options and "arena" in options:
             arena = options["arena"]
-        state = self.sim.reset(arena)
-        self.steps = 0
-        self.success = False
-        self._share_goal(arena.goal)
-        ranges = self.sim.scan(state)
-        return self._observe(state, ranges), self._info(state, False)
+        return self._begin(self.sim.reset(arena))
 
     def step(self, action):
         action = np.clip(np.asarray(action, dtype=float), -1.0, 1.0)
@@ -404,14 +436,4 @@ class CStepDroneEnv(EmpoweredRewardEnv):
             ]
         )
         state = self.sim.step(waypoint)
-        self.steps += 1
-        ranges, reward, info = self._outcome(state, self.sim.in_collision())
-        collision = info["collision"]
-        terminated = collision or state.tilt > MAX_TILT
-        truncated = not terminated and self.steps >= self.max_steps
-        return self._observe(state, ranges), float(reward), terminated, truncated, info
-
-    def close(self) -> None:
-        """Stops the env's own bridge, if any, and the simulation."""
-        super().close()
-        self.sim.close()
+        return self._finish_step(state, self.sim.in_collision(), state.tilt > MAX_TILT)

@@ -25,12 +25,11 @@ from __future__ import annotations
 from typing import ClassVar
 
 import numpy as np
-from gymnasium import spaces
 
 from ..sim.drone import CONTROL_HZ, DroneState
 from ..sim.maze import BALL_MASS, BALL_RADIUS, MAX_ACCELERATION, MazeSim
 from ..sim.maze_layout import MazeConfig
-from ..sim.world import LIDAR_BEAMS, LIDAR_RANGE, clipped_ranges
+from ..sim.world import clipped_ranges
 from ..training.curriculum import training_endpoints
 from .drone import RENDER_MODES, EmpoweredRewardEnv, checked_render_mode
 
@@ -94,22 +93,13 @@ class CStepMazeEnv(EmpoweredRewardEnv):
         self.render_mode = checked_render_mode(render_mode)
         self.sim = MazeSim(gui=render_mode == "human")
         self.robot_radius = BALL_RADIUS
-        high = np.array([10.0, 10.0, 20.0, 20.0])
-        self.observation_space = spaces.Box(
-            low=np.concatenate([-high, np.zeros(LIDAR_BEAMS)]).astype(np.float32),
-            high=np.concatenate([high, np.full(LIDAR_BEAMS, LIDAR_RANGE)]).astype(np.float32),
-            dtype=np.float32,
-        )
-        self.action_space = spaces.Box(-1.0, 1.0, shape=(2,), dtype=np.float32)
-        self.steps = 0
-        self.success = False
+        self._declare_spaces(np.array([10.0, 10.0, 20.0, 20.0]))
 
     def _observe(self, state: DroneState, ranges: np.ndarray) -> np.ndarray:
         obs = np.concatenate(
             [self.sim.goal[:2] - state.position[:2], state.velocity[:2], clipped_ranges(ranges)]
         )
-        low, high = self.observation_space.low, self.observation_space.high
-        return np.clip(obs, low, high).astype(np.float32)
+        return self._in_box(obs)
 
     def reset(self, *, seed: int | None = None, options: dict | None = None):
         """Start an episode: ``options["config"]``, else the env's fixed config, else one drawn
@@ -131,22 +121,10 @@ class CStepMazeEnv(EmpoweredRewardEnv):
             )
         if options and "config" in options:
             config = options["config"]
-        state = self.sim.reset(config)
-        self.steps = 0
-        self.success = False
-        self._share_goal(self.sim.goal)
-        return self._observe(state, self.sim.scan(state)), self._info(state, False)
+        return self._begin(self.sim.reset(config))
 
     def step(self, action):
         """Push the ball with ``action`` × m·A for one control step."""
         action = np.clip(np.asarray(action, dtype=float), -1.0, 1.0)
         state, collision = self.sim.step(action * BALL_MASS * MAX_ACCELERATION)
-        self.steps += 1
-        ranges, reward, info = self._outcome(state, collision)
-        truncated = not collision and self.steps >= self.max_steps
-        return self._observe(state, ranges), float(reward), collision, truncated, info
-
-    def close(self) -> None:
-        """Stops the env's own bridge, if any, and the simulation."""
-        super().close()
-        self.sim.close()
+        return self._finish_step(state, collision)

@@ -42,6 +42,8 @@ def configurations(env: str, eval_set: Path | None = None) -> list[Any]:
     ``eval_set``, a JSON file in the same format), the maze's 18 start × goal combinations."""
     if env == "drone":
         return load(eval_set or DEFAULT_PATH)
+    if env != "maze":
+        raise ConfigError(f"no evaluation set for env {env!r}: the drone and the maze have one")
     if eval_set is not None:
         raise ConfigError("--eval-set: only the drone takes an evaluation set from a file")
     return maze_configurations()

@@ -26,7 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..resources import config_file
-from ..sim.world import LIDAR_ANGLE_INCREMENT, LIDAR_ANGLE_MIN, LIDAR_RANGE, LIDAR_RANGE_MIN
+from ..sim.world import PAPER_LIDAR, Lidar
 
 try:
     from cstep_scoring import Scorer
@@ -69,11 +69,11 @@ def bridge_scorer(safety_coefficient: float, node_params: dict[str, str] | None 
     return Scorer(config=str(config_file()), **params, safety_coefficient=float(safety_coefficient))
 
 
-def score_requests(scorer: Scorer, requests: Sequence) -> list[Answer]:
+def score_requests(scorer: Scorer, requests: Sequence, lidar: Lidar = PAPER_LIDAR) -> list[Answer]:
     """``scorer``'s answers for the envs' :class:`~cstep_bridge.envs.drone.RewardRequest` s, in order,
-    in one batch: each state, scan (the simulated LiDAR's layout, :mod:`~cstep_bridge.sim.world`),
-    goal and collision flag exactly as :class:`~cstep_bridge.ros.bridge.RosBridge` sends them to
-    the node."""
+    in one batch: each state, scan (laid out as ``lidar``, the simulated LiDAR's layout,
+    :mod:`~cstep_bridge.sim.world`), goal and collision flag exactly as
+    :class:`~cstep_bridge.ros.bridge.RosBridge` sends them to the node."""
     states = [r.state for r in requests]
     goals = [r.goal for r in requests]
     if any(g is None for g in goals) and not all(g is None for g in goals):
@@ -86,10 +86,7 @@ def score_requests(scorer: Scorer, requests: Sequence) -> list[Answer]:
         np.array([r.ranges for r in requests], dtype=np.float32).reshape(len(requests), -1),
         None if goals and goals[0] is None else np.array(goals, dtype=np.float64).reshape(-1, 3),
         np.array([r.in_collision for r in requests], dtype=bool),
-        angle_min=LIDAR_ANGLE_MIN,
-        angle_increment=LIDAR_ANGLE_INCREMENT,
-        range_min=LIDAR_RANGE_MIN,
-        range_max=LIDAR_RANGE,
+        **lidar.scan_fields(),
     )
     return [
         Answer(

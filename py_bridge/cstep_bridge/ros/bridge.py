@@ -70,7 +70,7 @@ from ..errors import ConfigError, NodeDied, NodeError, RewardTimeout
 from ..resources import config_file, cstep_binary
 from ..reward.task import task_reward
 from ..sim.drone import DroneState
-from ..sim.world import LIDAR_ANGLE_INCREMENT, LIDAR_ANGLE_MIN, LIDAR_RANGE, LIDAR_RANGE_MIN
+from ..sim.world import PAPER_LIDAR, Lidar
 
 RELIABLE = QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE)
 LATCHED = QoSProfile(
@@ -162,16 +162,17 @@ def odometry_msg(state: DroneState, t: float) -> Odometry:
     return m
 
 
-def scan_msg(ranges: np.ndarray, t: float) -> LaserScan:
-    """The LiDAR ranges as a LaserScan in ``base_link`` (+inf = no return, REP 117)."""
+def scan_msg(ranges: np.ndarray, t: float, lidar: Lidar = PAPER_LIDAR) -> LaserScan:
+    """The LiDAR ranges as a LaserScan in ``base_link`` (+inf = no return, REP 117), laid out
+    as ``lidar`` (the paper's scanner unless a world names another)."""
     m = LaserScan()
     m.header.stamp = stamp(t)
     m.header.frame_id = "base_link"
-    m.angle_min = LIDAR_ANGLE_MIN
-    m.angle_increment = LIDAR_ANGLE_INCREMENT
-    m.angle_max = LIDAR_ANGLE_MIN + (len(ranges) - 1) * LIDAR_ANGLE_INCREMENT
-    m.range_min = LIDAR_RANGE_MIN
-    m.range_max = LIDAR_RANGE
+    m.angle_min = lidar.angle_min
+    m.angle_increment = lidar.angle_increment
+    m.angle_max = lidar.angle_min + (len(ranges) - 1) * lidar.angle_increment
+    m.range_min = lidar.range_min
+    m.range_max = lidar.range_max
     # float32, as the field is; an array.array skips rclpy's per-element checks (10 µs).
     m.ranges = array.array("f", np.asarray(ranges, dtype=np.float32).tobytes())
     return m
@@ -267,7 +268,8 @@ class RosBridge:
     the bridge checks that exactly one node serves the evaluate service.
     ``publish_sim_topics``: in service mode, whether :meth:`evaluate` also publishes ``/odom``,
     ``/scan`` and ``/clock`` for other listeners (nothing the reward needs; the topic mode always
-    publishes them).
+    publishes them). ``lidar``: the layout of the scans it is given (the paper's scanner unless
+    the robot carries another).
     """
 
     def __init__(
@@ -280,6 +282,7 @@ class RosBridge:
         discovery_timeout: float = 30.0,
         node_params: dict[str, str] | None = None,
         publish_sim_topics: bool = True,
+        lidar: Lidar = PAPER_LIDAR,
     ) -> None:
         if mode not in ("service", "topic"):
             raise ConfigError(f"mode must be 'service' or 'topic', not {mode!r}")
@@ -287,6 +290,7 @@ class RosBridge:
         self.publish_sim_topics = publish_sim_topics or mode == "topic"
         self.timeout = timeout
         self.safety_coefficient = float(safety_coefficient)
+        self.lidar = lidar
         self.cstep: CStepNode | None = None
         self.node: Node | None = None
         # Localhost-only discovery for this process's participant too (read by rmw at init).
@@ -478,7 +482,7 @@ class RosBridge:
         of :meth:`set_goal`); ``in_collision``: the simulator saw contact, so the node answers
         the floor without rolling out. Publishes odometry, scan and clock first when
         ``publish_sim_topics`` (always in topic mode)."""
-        odom, scan = odometry_msg(state, t), scan_msg(ranges, t)
+        odom, scan = odometry_msg(state, t), scan_msg(ranges, t, self.lidar)
         if self.publish_sim_topics:
             clock = Clock()
             clock.clock = stamp(t)
@@ -514,7 +518,7 @@ class RosBridge:
                 f"{len(goals)} goals and {len(collisions)} collision flags"
             )
         odoms = [odometry_msg(s, tt) for s, tt in zip(states, times, strict=True)]
-        scans = [scan_msg(r, tt) for r, tt in zip(ranges_list, times, strict=True)]
+        scans = [scan_msg(r, tt, self.lidar) for r, tt in zip(ranges_list, times, strict=True)]
         answers: list[Reward] = []
         for i in range(0, k, STATES_PER_CALL):
             part = slice(i, i + STATES_PER_CALL)

@@ -183,6 +183,14 @@ class DroneState:
     angular_velocity: np.ndarray
     rotation: np.ndarray  # body → world
 
+    @classmethod
+    def of_base(cls, body: int, client: int) -> DroneState:
+        """The state of PyBullet body ``body``'s base (its root link) in ``client``."""
+        pos, quat = p.getBasePositionAndOrientation(body, physicsClientId=client)
+        vel, ang = p.getBaseVelocity(body, physicsClientId=client)
+        rot = np.array(p.getMatrixFromQuaternion(quat)).reshape(3, 3)
+        return cls(np.array(pos), np.array(quat), np.array(vel), np.array(ang), rot)
+
     @property
     def rpy(self) -> np.ndarray:
         return np.array(p.getEulerFromQuaternion(self.quaternion))
@@ -345,10 +353,7 @@ class DroneSim(PhysicsWorld):
         return self.arena.goal
 
     def state(self) -> DroneState:
-        pos, quat = p.getBasePositionAndOrientation(self.drone, physicsClientId=self.client)
-        vel, ang = p.getBaseVelocity(self.drone, physicsClientId=self.client)
-        rot = np.array(p.getMatrixFromQuaternion(quat)).reshape(3, 3)
-        return DroneState(np.array(pos), np.array(quat), np.array(vel), np.array(ang), rot)
+        return DroneState.of_base(self.drone, self.client)
 
     def scan(self, state: DroneState | None = None) -> np.ndarray:
         """LiDAR ranges (m) for bearings angle_min + i·increment in the body frame (yaw only:

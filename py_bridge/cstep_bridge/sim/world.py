@@ -1,26 +1,76 @@
-"""What the drone arena and the point maze share: static boxes, the 2D LiDAR and wall clearance.
+"""What the worlds share — the drone arena, the point maze, the Husky's hall: static boxes, the 2D
+LiDAR and wall clearance.
 
-Both worlds are built from axis-aligned boxes, carry the paper's LiDAR (180 beams over 360°, 3 m,
-+inf where nothing returns) at the robot's centre, and measure how close the robot's centre is to
-rectangular obstacles in the plane. Keeping those here means the two simulations sense and measure
+Every world is built from axis-aligned boxes, carries a planar LiDAR (beams evenly over 360°
+from −π, +inf where nothing returns; the paper's 180 beams to 3 m unless a world names another
+:class:`Lidar`) at the robot's centre, and measures how close the robot's centre is to
+rectangular obstacles in the plane. Keeping those here means the simulations sense and measure
 their worlds with the same code.
 """
 
 from __future__ import annotations
 
+import functools
 import math
+from dataclasses import dataclass
 
 import numpy as np
 import pybullet as p
 
 from .paper_world import LIDAR
 
-# The LiDAR of the paper (config/paper_world.json): 180 beams over 360°, 3 m range.
-LIDAR_BEAMS: int = LIDAR["beams"]
-LIDAR_RANGE: float = LIDAR["range_max"]
-LIDAR_RANGE_MIN: float = LIDAR["range_min"]
-LIDAR_ANGLE_MIN = -math.pi
-LIDAR_ANGLE_INCREMENT = 2 * math.pi / LIDAR_BEAMS
+
+@dataclass(frozen=True)
+class Lidar:
+    """A planar scanner's layout, as its ``sensor_msgs/LaserScan`` states it: ``beams`` bearings
+    from −π in steps of 2π/``beams`` (the scanner's frame), ranges from ``range_min`` to
+    ``range_max`` metres."""
+
+    beams: int
+    range_min: float
+    range_max: float
+
+    @property
+    def angle_min(self) -> float:
+        """The first beam's bearing (rad)."""
+        return -math.pi
+
+    @property
+    def angle_increment(self) -> float:
+        """The angle between neighbouring beams (rad)."""
+        return 2 * math.pi / self.beams
+
+    @property
+    def bearings(self) -> np.ndarray:
+        """The beams' bearings in the scanner's frame (rad)."""
+        return _bearings(self.beams)
+
+    def scan_fields(self) -> dict[str, float]:
+        """The layout as the scorer's ``score_batch`` keywords (a LaserScan's field names)."""
+        return {
+            "angle_min": self.angle_min,
+            "angle_increment": self.angle_increment,
+            "range_min": self.range_min,
+            "range_max": self.range_max,
+        }
+
+
+@functools.cache
+def _bearings(beams: int) -> np.ndarray:
+    """The bearings of a ``beams``-beam scanner (computed once per layout, read-only)."""
+    bearings = -math.pi + (2 * math.pi / beams) * np.arange(beams)
+    bearings.flags.writeable = False
+    return bearings
+
+
+PAPER_LIDAR = Lidar(LIDAR["beams"], LIDAR["range_min"], LIDAR["range_max"])
+"""The LiDAR of the paper (config/paper_world.json): 180 beams over 360°, 3 m range; the drone's
+and the maze's."""
+LIDAR_BEAMS: int = PAPER_LIDAR.beams
+LIDAR_RANGE: float = PAPER_LIDAR.range_max
+LIDAR_RANGE_MIN: float = PAPER_LIDAR.range_min
+LIDAR_ANGLE_MIN = PAPER_LIDAR.angle_min
+LIDAR_ANGLE_INCREMENT = PAPER_LIDAR.angle_increment
 
 PHYSICS_HZ = 240
 """Physics steps per second in every world (the paper's 240 Hz)."""
@@ -48,13 +98,11 @@ def create_box(
     return p.createMultiBody(0, col, vis, centre, physicsClientId=client)
 
 
-_BEARINGS = LIDAR_ANGLE_MIN + LIDAR_ANGLE_INCREMENT * np.arange(LIDAR_BEAMS)
-"""The beams' bearings in the scanner's frame (rad)."""
-
-
-def lidar_scan(boxes: np.ndarray, position: np.ndarray, yaw: float, r0: float) -> np.ndarray:
-    """LiDAR ranges (m) from ``position`` for bearings angle_min + i·increment relative to ``yaw``
-    (a levelled 2D scanner); +inf where nothing is within 3 m (REP 117).
+def lidar_scan(
+    boxes: np.ndarray, position: np.ndarray, yaw: float, r0: float, lidar: Lidar = PAPER_LIDAR
+) -> np.ndarray:
+    """``lidar``'s ranges (m) from ``position`` for bearings angle_min + i·increment relative to
+    ``yaw`` (a levelled 2D scanner); +inf where nothing is within its range (REP 117).
 
     ``boxes``: the world's static boxes, one row (x0, y0, z0, x1, y1, z1) each. Rays start ``r0``
     from the centre — just outside the robot's own collision shape — and ranges are measured
@@ -65,7 +113,7 @@ def lidar_scan(boxes: np.ndarray, position: np.ndarray, yaw: float, r0: float) -
     this is the same answer as ``rayTestBatch`` over the same bodies (a test compares the two on
     random poses in both worlds) at a fraction of its cost, which was a third of an env step.
     """
-    angles = _BEARINGS + yaw
+    angles = lidar.bearings + yaw
     dirs = np.stack([np.cos(angles), np.sin(angles)])[:, :, None]  # (2, beams, 1)
     # A beam parallel to an axis crosses that axis's planes at ±∞ (never 0/0 = NaN on a face).
     dirs[np.abs(dirs) < 1e-300] = 1e-300
@@ -77,14 +125,24 @@ def lidar_scan(boxes: np.ndarray, position: np.ndarray, yaw: float, r0: float) -
         t1, t2 = lo / dirs, hi / dirs  # (2, beams, boxes): where each slab's planes are crossed
     enter = np.minimum(t1, t2).max(axis=0)
     leave = np.maximum(t1, t2).min(axis=0)
-    hit = (enter <= leave) & (enter >= r0) & (enter < LIDAR_RANGE)
+    hit = (enter <= leave) & (enter >= r0) & (enter < lidar.range_max)
     ranges = np.where(hit, enter, np.inf).min(axis=1, initial=np.inf)
     return ranges
 
 
-def clipped_ranges(ranges: np.ndarray) -> np.ndarray:
-    """The ranges as an observation: no return (+inf) reads as the 3 m range, all in [0, 3] m."""
-    return np.clip(np.where(np.isfinite(ranges), ranges, LIDAR_RANGE), 0.0, LIDAR_RANGE)
+def clipped_ranges(ranges: np.ndarray, range_max: float = LIDAR_RANGE) -> np.ndarray:
+    """The ranges as an observation: no return (+inf) reads as the range (the paper's 3 m unless
+    ``range_max`` says), all in [0, range]."""
+    return np.clip(np.where(np.isfinite(ranges), ranges, range_max), 0.0, range_max)
+
+
+def clearance(xy: np.ndarray, bounds: Rect, rects: list[Rect] | tuple[Rect, ...]) -> float:
+    """Distance (m) from a point to the nearest wall of the rectangular room ``bounds`` or face
+    of ``rects``, in the plane (negative inside one)."""
+    x, y = float(xy[0]), float(xy[1])
+    x0, y0, x1, y1 = bounds
+    walls = min(x - x0, x1 - x, y - y0, y1 - y)
+    return min([walls, *(rect_distance(x, y, r) for r in rects)])
 
 
 def rect_distance(x: float, y: float, rect: Rect) -> float:
@@ -120,9 +178,11 @@ class PhysicsWorld:
         self.boxes = np.vstack([self.boxes, [*lo, *hi]])
         return create_box(self.client, lo, hi, rgba)
 
-    def lidar(self, position: np.ndarray, yaw: float, r0: float) -> np.ndarray:
+    def lidar(
+        self, position: np.ndarray, yaw: float, r0: float, lidar: Lidar = PAPER_LIDAR
+    ) -> np.ndarray:
         """The world's LiDAR ranges from ``position`` (see :func:`lidar_scan`)."""
-        return lidar_scan(self.boxes, np.asarray(position, dtype=float), yaw, r0)
+        return lidar_scan(self.boxes, np.asarray(position, dtype=float), yaw, r0, lidar)
 
     def _restart(self, gravity: float) -> None:
         """Empties the world and restarts the clock: gravity ``gravity`` m/s² down, 240 Hz."""

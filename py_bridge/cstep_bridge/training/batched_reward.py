@@ -71,6 +71,7 @@ class BatchedReward(VecEnvWrapper):
         if len(sources) != 1:
             raise ConfigError(f"the envs take their rewards from different sources: {sources}")
         self.scorer = None
+        self.lidar = args[0]["lidar"]  # the envs' scan layout, for the in-process scorer
         if sources == {"inprocess"}:
             if bridge is not None:
                 raise ConfigError("envs with reward_source='inprocess' take no bridge")
@@ -100,7 +101,7 @@ class BatchedReward(VecEnvWrapper):
         if self.scorer is not None:
             from ..reward.scoring import score_requests  # the extension, only when used
 
-            answers = score_requests(self.scorer, requests)
+            answers = score_requests(self.scorer, requests, self.lidar)
         else:
             answers = self.bridge.evaluate_batch(
                 [r.state for r in requests],

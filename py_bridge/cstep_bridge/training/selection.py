@@ -121,6 +121,10 @@ def validation_set(env: str, size: int) -> list[Any]:
     evaluation set."""
     if env == "drone":
         return generate(size, seed=DRONE_SEED)
+    if env != "maze":
+        raise ConfigError(
+            f"validation: no validation set for env {env!r}: the drone and the maze have one"
+        )
 
     rng = np.random.default_rng(MAZE_SEED)
     out = []

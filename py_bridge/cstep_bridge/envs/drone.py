@@ -35,6 +35,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
@@ -205,6 +206,24 @@ class EmpoweredRewardEnv(gym.Env):
             else training_fraction(self.goal_fraction, self.np_random, self.full_task_share)
         )
         return self.episode_goal_fraction
+
+    def _curriculum_task(self, task, fixed: bool, clearance: Callable[[np.ndarray], float]):
+        """At reset: ``task`` (a dataclass with ``start`` and ``goal`` points) with its endpoints
+        moved by the training curriculum (:func:`training_endpoints`, ``clearance`` telling how
+        far a point is from every obstacle); ``task`` itself when ``fixed`` or at the last
+        level. Its points keep their type (a tuple stays a tuple of floats)."""
+        fraction = self._draw_goal_fraction(fixed)
+        if fraction >= 1.0:
+            return task
+        start, goal = training_endpoints(
+            np.asarray(task.start), np.asarray(task.goal), fraction, clearance,
+            self.curriculum_moves,
+        )  # fmt: skip
+
+        def like(old, new):
+            return tuple(float(v) for v in new) if isinstance(old, tuple) else new
+
+        return dataclasses.replace(task, start=like(task.start, start), goal=like(task.goal, goal))
 
     control_period = 1.0 / CONTROL_HZ
     """Seconds per env step (the 30 Hz control rate)."""
@@ -415,12 +434,7 @@ class CStepDroneEnv(EmpoweredRewardEnv):
     def reset(self, *, seed: int | None = None, options: dict | None = None):
         super().reset(seed=seed)
         arena = self.fixed_arena or Arena.random(self.np_random)
-        f = self._draw_goal_fraction(self.fixed_arena is not None)
-        if f < 1.0:
-            start, goal = training_endpoints(
-                arena.start, arena.goal, f, arena.clearance, self.curriculum_moves
-            )
-            arena = dataclasses.replace(arena, start=start, goal=goal)
+        arena = self._curriculum_task(arena, self.fixed_arena is not None, arena.clearance)
         if options and "arena" in options:
             arena = options["arena"]
         return self._begin(self.sim.reset(arena))

@@ -40,7 +40,6 @@ from ..sim.husky import (
     HuskySim,
 )
 from ..sim.world import clipped_ranges
-from ..training.curriculum import training_endpoints
 from .drone import RENDER_MODES, EmpoweredRewardEnv, checked_render_mode
 
 EPISODE_SECONDS = 30.0
@@ -106,12 +105,7 @@ class CStepHuskyEnv(EmpoweredRewardEnv):
         the reset seed (moved by the training curriculum, if one is set)."""
         super().reset(seed=seed)
         hall = self.fixed_hall or Hall.random(self.np_random)
-        fraction = self._draw_goal_fraction(self.fixed_hall is not None)
-        if fraction < 1.0:
-            start, goal = training_endpoints(
-                hall.start, hall.goal, fraction, Hall.clearance, self.curriculum_moves
-            )
-            hall = Hall(start=start, yaw=hall.yaw, goal=goal)
+        hall = self._curriculum_task(hall, self.fixed_hall is not None, Hall.clearance)
         if options and "hall" in options:
             hall = options["hall"]
         return self._begin(self.sim.reset(hall))

@@ -30,7 +30,6 @@ from ..sim.drone import CONTROL_HZ, DroneState
 from ..sim.maze import BALL_MASS, BALL_RADIUS, MAX_ACCELERATION, MazeSim
 from ..sim.maze_layout import MazeConfig
 from ..sim.world import clipped_ranges
-from ..training.curriculum import training_endpoints
 from .drone import RENDER_MODES, EmpoweredRewardEnv, checked_render_mode
 
 HORIZON = 0.8
@@ -107,18 +106,9 @@ class CStepMazeEnv(EmpoweredRewardEnv):
         super().reset(seed=seed)
         configs = self.sim.layout.configurations()
         config = self.fixed_config or configs[self.np_random.integers(len(configs))]
-        fraction = self._draw_goal_fraction(self.fixed_config is not None)
-        if fraction < 1.0:
-            start, goal = training_endpoints(
-                np.array(config.start),
-                np.array(config.goal),
-                fraction,
-                self.sim.layout.clearance,
-                self.curriculum_moves,
-            )
-            config = MazeConfig(
-                (float(start[0]), float(start[1])), (float(goal[0]), float(goal[1]))
-            )
+        config = self._curriculum_task(
+            config, self.fixed_config is not None, self.sim.layout.clearance
+        )
         if options and "config" in options:
             config = options["config"]
         return self._begin(self.sim.reset(config))

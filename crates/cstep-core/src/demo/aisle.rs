@@ -7,22 +7,69 @@
 //! (0.6 m) everywhere: it never touches, but the door and the corner crowd it enough for its
 //! score to dip there.
 
+use std::sync::LazyLock;
+
 use nalgebra::Vector2;
+use serde::Deserialize;
 
 use crate::demo::arena::Flight;
 use crate::demo::scene::{Lidar, Scene};
 
-/// The hall `(x_min, y_min, x_max, y_max)`, metres.
-const HALL: [f64; 4] = [-1.0, -2.0, 9.0, 2.0];
+/// `config/husky_hall.json`, as compiled in: the hall's, the drive's and the LiDAR's numbers,
+/// read by the Python package's Husky world too (its `data/husky_hall.json` is that file).
+pub const HUSKY_HALL_JSON: &str = include_str!("../../../../config/husky_hall.json");
 
-/// The pallet stacks `(x_min, y_min, x_max, y_max)`, one from each side wall, the door between.
-const PALLETS: [[f64; 4]; 2] = [[3.0, -2.0, 4.0, -0.7], [3.0, 0.7, 4.0, 2.0]];
+/// The hall world as `config/husky_hall.json` states it.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct HallWorld {
+    /// The hall's geometry.
+    pub hall: HallSpec,
+    /// The demo's scripted drive.
+    pub drive: DriveSpec,
+    /// The ground robot's scanner.
+    pub lidar: Lidar,
+    /// How the Python env draws its tasks.
+    pub draws: HallDraws,
+}
 
-/// The route's waypoints `(x, y)`: through the door, then toward the far corner.
-const ROUTE: [(f64, f64); 3] = [(0.0, 0.0), (6.5, 0.0), (8.0, 1.0)];
+/// The hall's geometry (metres, world frame).
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct HallSpec {
+    /// The hall `(x_min, y_min, x_max, y_max)`.
+    pub bounds: [f64; 4],
+    /// The pallet stacks `(x_min, y_min, x_max, y_max)`, one from each side wall, the door
+    /// between.
+    pub pallets: Vec<[f64; 4]>,
+    /// The walls' height (the simulation's boxes; the scan is planar).
+    pub wall_height: f64,
+    /// The pallet stacks' height (likewise).
+    pub pallet_height: f64,
+}
 
-/// Driving speed, m/s: the Husky's top speed (1.0 m/s, Clearpath's figure).
-const SPEED: f64 = 1.0;
+/// The demo's drive: waypoints `(x, y)` through the door toward the far corner, and its speed.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DriveSpec {
+    /// The route's waypoints.
+    pub route: Vec<[f64; 2]>,
+    /// Driving speed, m/s: the Husky's top speed (1.0 m/s, Clearpath's figure).
+    pub speed: f64,
+}
+
+/// How the Python env draws starts and goals in the hall.
+#[derive(Debug, Clone, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct HallDraws {
+    /// The least distance from a drawn start or goal to every wall and pallet, metres.
+    pub margin: f64,
+}
+
+/// The hall world, read once from [`HUSKY_HALL_JSON`].
+pub static HUSKY_HALL: LazyLock<HallWorld> = LazyLock::new(|| {
+    serde_json::from_str(HUSKY_HALL_JSON).expect("config/husky_hall.json is checked by the tests")
+});
 
 /// A hall with its pallets.
 #[derive(Debug, Clone, PartialEq)]
@@ -38,34 +85,33 @@ pub struct Aisle {
 impl Aisle {
     /// The demo's hall.
     pub fn hall() -> Self {
-        let [x0, y0, x1, y1] = HALL;
-        let scene = PALLETS
+        let spec = &HUSKY_HALL.hall;
+        let [x0, y0, x1, y1] = spec.bounds;
+        let scene = spec
+            .pallets
             .iter()
             .fold(Scene::open().boxed(x0, y0, x1, y1), |scene, p| {
                 scene.boxed(p[0], p[1], p[2], p[3])
             });
         Self {
             scene,
-            bounds: HALL,
-            pallets: PALLETS.to_vec(),
+            bounds: spec.bounds,
+            pallets: spec.pallets.clone(),
         }
     }
 
     /// The drive weaving past the pallets at the Husky's top speed.
     pub fn drive() -> Flight {
+        let drive = &HUSKY_HALL.drive;
         Flight::new(
-            ROUTE.iter().map(|&(x, y)| Vector2::new(x, y)).collect(),
-            SPEED,
+            drive.route.iter().map(|&[x, y]| Vector2::new(x, y)).collect(),
+            drive.speed,
         )
     }
 
     /// A 2-D LiDAR as ground robots carry: one beam a degree, 0.1–10 m.
     pub fn lidar() -> Lidar {
-        Lidar {
-            beams: 360,
-            range_min: 0.1,
-            range_max: 10.0,
-        }
+        HUSKY_HALL.lidar
     }
 }
 

@@ -104,7 +104,11 @@ impl Aisle {
     pub fn drive() -> Flight {
         let drive = &HUSKY_HALL.drive;
         Flight::new(
-            drive.route.iter().map(|&[x, y]| Vector2::new(x, y)).collect(),
+            drive
+                .route
+                .iter()
+                .map(|&[x, y]| Vector2::new(x, y))
+                .collect(),
             drive.speed,
         )
     }

@@ -18,7 +18,7 @@ from cstep_bridge.envs.drone import CStepDroneEnv
 from cstep_bridge.errors import RewardTimeout
 from cstep_bridge.ros.bridge import CStepNode, RosBridge, odometry_msg, scan_msg
 from cstep_bridge.sim.drone import Arena, DroneSim
-from cstep_bridge.sim.world import LIDAR_BEAMS
+from cstep_bridge.sim.world import PAPER_LIDAR
 from gymnasium.utils.env_checker import check_env
 from node_rig import cstep_eval
 
@@ -32,7 +32,7 @@ def arena(block_y: float) -> Arena:
 
 def beam(bearing: float) -> int:
     """Index of the beam at body-frame ``bearing`` (rad)."""
-    return round((bearing + math.pi) / (2 * math.pi / LIDAR_BEAMS)) % LIDAR_BEAMS
+    return round((bearing + math.pi) / (2 * math.pi / PAPER_LIDAR.beams)) % PAPER_LIDAR.beams
 
 
 def test_urdf_properties_give_the_crazyflie_hover_and_max_rpm():
@@ -91,7 +91,7 @@ def test_lidar_sees_the_walls_at_the_right_range_in_the_body_frame():
     sim = DroneSim(arena(0.3))  # block at y in [0.05, 0.55]: nothing ahead within 3 m
     try:
         r = sim.scan()
-        assert r.shape == (LIDAR_BEAMS,)
+        assert r.shape == (PAPER_LIDAR.beams,)
         assert r[beam(-math.pi)] == pytest.approx(0.35, abs=1e-3)  # behind: wall x = -0.5
         assert r[beam(-math.pi / 2)] == pytest.approx(1.15, abs=1e-3)  # right: wall y = -1.75
         assert math.isinf(r[beam(0.0)])  # ahead: far wall 4.65 m away, beyond 3 m

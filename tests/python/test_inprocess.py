@@ -13,12 +13,7 @@ from conftest import wait_until
 from cstep_bridge.envs.maze import NODE_PARAMS
 from cstep_bridge.reward.scoring import Scorer, bridge_scorer
 from cstep_bridge.ros.bridge import STATES_PER_CALL, CStepNode
-from cstep_bridge.sim.world import (
-    LIDAR_ANGLE_INCREMENT,
-    LIDAR_ANGLE_MIN,
-    LIDAR_RANGE,
-    LIDAR_RANGE_MIN,
-)
+from cstep_bridge.sim.world import PAPER_LIDAR
 from cstep_bridge.training.batched_reward import make_batched_vec_env
 from cstep_bridge.training.config import RunConfig
 from cstep_msgs.srv import EvaluateBatch
@@ -33,12 +28,7 @@ from test_train import TINY
 
 C = 0.7
 BEAMS = 180
-LIDAR = {
-    "angle_min": LIDAR_ANGLE_MIN,
-    "angle_increment": LIDAR_ANGLE_INCREMENT,
-    "range_min": LIDAR_RANGE_MIN,
-    "range_max": LIDAR_RANGE,
-}
+LIDAR = PAPER_LIDAR.scan_fields()
 # The node's Empowerment and EmpoweredReward fields the scorer answers too, by the same names.
 EMPOWERMENT_FIELDS = (
     "empowerment",
@@ -75,14 +65,14 @@ def random_states(rng: np.random.Generator, n: int) -> dict[str, np.ndarray]:
         "goals": rng.uniform(-5, 5, (n, 3)),
         "in_collision": rng.random(n) < 0.1,
     }
-    bearings = LIDAR_ANGLE_MIN + LIDAR_ANGLE_INCREMENT * np.arange(BEAMS)
+    bearings = PAPER_LIDAR.angle_min + PAPER_LIDAR.angle_increment * np.arange(BEAMS)
     width = rng.uniform(1.5, 4.5, (n, 1))
     heading = rng.uniform(-math.pi, math.pi, (n, 1))
     offset = rng.uniform(-0.2, 0.2, (n, 1)) * width
     sine = np.sin(bearings[None, :] - heading)
     with np.errstate(divide="ignore"):
         ranges = np.where(sine > 0, (width / 2 - offset) / sine, (width / 2 + offset) / -sine)
-    ranges = np.where(ranges > LIDAR_RANGE, np.inf, ranges)
+    ranges = np.where(ranges > PAPER_LIDAR.range_max, np.inf, ranges)
     ranges[rng.random((n, BEAMS)) < 0.02] = np.nan
     ranges[rng.random(n) < 0.05, 0] = -np.inf  # an object too close: everything collides
     states["scans"] = ranges.astype(np.float32)

@@ -29,7 +29,7 @@ def test_the_scorer_and_the_simulation_read_the_same_world():
 
 def test_the_simulation_builds_its_arena_and_lidar_from_the_file():
     arena, lidar = PAPER_WORLD["arena"], PAPER_WORLD["lidar"]
-    assert (world.LIDAR_BEAMS, world.LIDAR_RANGE, world.LIDAR_RANGE_MIN) == (
+    assert (world.PAPER_LIDAR.beams, world.PAPER_LIDAR.range_max, world.PAPER_LIDAR.range_min) == (
         lidar["beams"],
         lidar["range_max"],
         lidar["range_min"],
@@ -79,13 +79,13 @@ def test_the_task_reward_is_the_scorers():
         orientations=np.tile([0.0, 0.0, 0.0, 1.0], (n, 1)),
         velocities=np.zeros((n, 3)),
         angular_velocities=np.zeros((n, 3)),
-        scans=np.full((n, world.LIDAR_BEAMS), np.inf, dtype=np.float32),
+        scans=np.full((n, world.PAPER_LIDAR.beams), np.inf, dtype=np.float32),
         goals=goals,
         in_collision=np.zeros(n, dtype=bool),
-        angle_min=world.LIDAR_ANGLE_MIN,
-        angle_increment=world.LIDAR_ANGLE_INCREMENT,
-        range_min=world.LIDAR_RANGE_MIN,
-        range_max=world.LIDAR_RANGE,
+        angle_min=world.PAPER_LIDAR.angle_min,
+        angle_increment=world.PAPER_LIDAR.angle_increment,
+        range_min=world.PAPER_LIDAR.range_min,
+        range_max=world.PAPER_LIDAR.range_max,
     )
     expected = [
         task_reward(float(np.linalg.norm(g - p))) for p, g in zip(positions, goals, strict=True)

@@ -73,15 +73,6 @@ def episode_matrix(
     return np.array([[value(table[m][c]) for c in configs] for m in models])
 
 
-def _mean_of_finite(values: np.ndarray) -> np.ndarray:
-    """Mean over the last two axes ignoring NaN (NaN where nothing is finite), without warnings."""
-    finite = np.isfinite(values)
-    count = finite.sum(axis=(-2, -1))
-    total = np.where(finite, values, 0.0).sum(axis=(-2, -1))
-    with np.errstate(invalid="ignore", divide="ignore"):
-        return np.where(count > 0, total / np.maximum(count, 1), np.nan)
-
-
 def ratio_interval(baseline: np.ndarray, agent: np.ndarray) -> tuple[float, float]:
     """95 % percentile bootstrap interval of mean(agent) / mean(baseline) (seeds ×
     configurations, NaN = no value): each resample draws the configurations once for both and
@@ -93,8 +84,8 @@ def ratio_interval(baseline: np.ndarray, agent: np.ndarray) -> tuple[float, floa
         c = rng.integers(0, baseline.shape[1], (1000, baseline.shape[1]))
         sb = rng.integers(0, baseline.shape[0], (1000, baseline.shape[0]))
         sa = rng.integers(0, agent.shape[0], (1000, agent.shape[0]))
-        b = _mean_of_finite(baseline[sb[:, :, None], c[:, None, :]])
-        a = _mean_of_finite(agent[sa[:, :, None], c[:, None, :]])
+        b = comparison.mean_of_finite(baseline[sb[:, :, None], c[:, None, :]])
+        a = comparison.mean_of_finite(agent[sa[:, :, None], c[:, None, :]])
         ratios.append(a / b)
     r = np.concatenate(ratios)
     low, high = np.percentile(r[np.isfinite(r)], [2.5, 97.5])
@@ -192,7 +183,7 @@ def verdict(doc: dict, table: dict[str, dict[int, dict]]) -> list[str]:
 
     cells = []
     for a in agents:  # the word is the cleared episodes' reading, the fair one (protocol.md)
-        ours, theirs = (float(_mean_of_finite(near_cleared[x])) for x in (a, base))
+        ours, theirs = (float(comparison.mean_of_finite(near_cleared[x])) for x in (a, base))
         word = reading(ours < theirs, p_near_cleared[a], wanted_more=True)
         all_ours, all_theirs = iv[a]["within_0.1"]["mean"], iv[base]["within_0.1"]["mean"]
         paper = PAPER.get(paper_key(a), (None, None, None))[2]

@@ -49,7 +49,7 @@ class PairedTest:
     pvalue: float
 
 
-def _mean_of_finite(values: np.ndarray) -> np.ndarray:
+def mean_of_finite(values: np.ndarray) -> np.ndarray:
     """Mean over the last two axes ignoring NaN; NaN where nothing is finite (no warning, unlike
     ``np.nanmean``, which warns on every empty resample)."""
     finite = np.isfinite(values)
@@ -79,7 +79,7 @@ def bootstrap_ci(
         raise ValueError(
             f"values must be a non-empty (seeds, configurations) matrix: {values.shape}"
         )
-    mean = float(_mean_of_finite(values))
+    mean = float(mean_of_finite(values))
     if np.isnan(mean):
         return Interval(None, None, None)
     n_seeds, n_configs = values.shape
@@ -90,7 +90,7 @@ def bootstrap_ci(
         k = min(chunk, resamples - start)
         s = rng.integers(0, n_seeds, (k, n_seeds))
         c = rng.integers(0, n_configs, (k, n_configs))
-        boot[start : start + k] = _mean_of_finite(values[s[:, :, None], c[:, None, :]])
+        boot[start : start + k] = mean_of_finite(values[s[:, :, None], c[:, None, :]])
     boot = boot[np.isfinite(boot)]  # a resample that drew no finite value has no mean
     tail = 50 * (1 - confidence)
     low, high = np.percentile(boot, [tail, 100 - tail])
@@ -147,7 +147,7 @@ def wilcoxon_paired(baseline: np.ndarray, agent: np.ndarray) -> PairedTest:
 
 def _seed_means(values: np.ndarray) -> np.ndarray:
     """Per configuration, the mean over the seeds that have a value (NaN where none has)."""
-    return _mean_of_finite(np.asarray(values, dtype=float).T[:, :, None])
+    return mean_of_finite(np.asarray(values, dtype=float).T[:, :, None])
 
 
 def metric_matrix(

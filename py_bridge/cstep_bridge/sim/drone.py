@@ -34,7 +34,7 @@ import pybullet as p
 
 from ..resources import drone_urdf
 from .paper_world import ARENA
-from .world import PHYSICS_HZ, PhysicsWorld, rect_distance
+from .world import PHYSICS_HZ, PhysicsWorld, clearance, wall_distance
 
 G = 9.8
 CONTROL_HZ = 30
@@ -164,13 +164,11 @@ class Arena:
 
     def wall_distance(self, xy: np.ndarray) -> float:
         """Distance (m) from a point to the nearest of the four walls, 2D (not the block)."""
-        x, y = float(xy[0]), float(xy[1])
-        x0, y0, x1, y1 = self.bounds
-        return min(x - x0, x1 - x, y - y0, y1 - y)
+        return wall_distance(xy, self.bounds)
 
     def clearance(self, xy: np.ndarray) -> float:
         """Distance (m) from a point to the nearest wall or block face, 2D (negative inside)."""
-        return min(self.wall_distance(xy), rect_distance(float(xy[0]), float(xy[1]), self.block))
+        return clearance(xy, self.bounds, (self.block,))
 
 
 @dataclass

@@ -66,11 +66,6 @@ def _bearings(beams: int) -> np.ndarray:
 PAPER_LIDAR = Lidar(LIDAR["beams"], LIDAR["range_min"], LIDAR["range_max"])
 """The LiDAR of the paper (config/paper_world.json): 180 beams over 360°, 3 m range; the drone's
 and the maze's."""
-LIDAR_BEAMS: int = PAPER_LIDAR.beams
-LIDAR_RANGE: float = PAPER_LIDAR.range_max
-LIDAR_RANGE_MIN: float = PAPER_LIDAR.range_min
-LIDAR_ANGLE_MIN = PAPER_LIDAR.angle_min
-LIDAR_ANGLE_INCREMENT = PAPER_LIDAR.angle_increment
 
 PHYSICS_HZ = 240
 """Physics steps per second in every world (the paper's 240 Hz)."""
@@ -130,19 +125,25 @@ def lidar_scan(
     return ranges
 
 
-def clipped_ranges(ranges: np.ndarray, range_max: float = LIDAR_RANGE) -> np.ndarray:
+def clipped_ranges(ranges: np.ndarray, range_max: float = PAPER_LIDAR.range_max) -> np.ndarray:
     """The ranges as an observation: no return (+inf) reads as the range (the paper's 3 m unless
     ``range_max`` says), all in [0, range]."""
     return np.clip(np.where(np.isfinite(ranges), ranges, range_max), 0.0, range_max)
+
+
+def wall_distance(xy: np.ndarray, bounds: Rect) -> float:
+    """Distance (m) from a point to the nearest wall of the rectangular room ``bounds``, in the
+    plane (negative outside it)."""
+    x, y = float(xy[0]), float(xy[1])
+    x0, y0, x1, y1 = bounds
+    return min(x - x0, x1 - x, y - y0, y1 - y)
 
 
 def clearance(xy: np.ndarray, bounds: Rect, rects: list[Rect] | tuple[Rect, ...]) -> float:
     """Distance (m) from a point to the nearest wall of the rectangular room ``bounds`` or face
     of ``rects``, in the plane (negative inside one)."""
     x, y = float(xy[0]), float(xy[1])
-    x0, y0, x1, y1 = bounds
-    walls = min(x - x0, x1 - x, y - y0, y1 - y)
-    return min([walls, *(rect_distance(x, y, r) for r in rects)])
+    return min([wall_distance(xy, bounds), *(rect_distance(x, y, r) for r in rects)])
 
 
 def rect_distance(x: float, y: float, rect: Rect) -> float:

@@ -5,7 +5,7 @@
 //! outputs, exactly as the node, the services and `cstep eval` do.
 //!
 //! `cargo test` runs proptest's default 256 cases per property (`PROPTEST_CASES` overrides it);
-//! the long run is documented in `docs/results/protocol.md` ("The long property-test run"):
+//! the long run is documented in `experiments/protocol.md` ("The long property-test run"):
 //! `PROPTEST_CASES=10000000 cargo test --release --test input_properties`.
 
 use std::f64::consts::{PI, TAU};

@@ -56,7 +56,7 @@ TRAIN_ARGS = [
 """A tiny seeded run of the tuned protocol (normalised observations, curriculum, squashed gSDE)
 without validation, in this process's two envs: 2 updates."""
 
-MODEL = REPO / "docs/results/drone/verdict/models/unempowered-s11/model.zip"
+MODEL = REPO / "experiments/drone/verdict/models/unempowered-s11/model.zip"
 """A committed model (a run.json, weights and its VecNormalize statistics)."""
 
 ARENAS = [0, 1, 2]

@@ -125,9 +125,9 @@ run.json files predate run.json recording n_envs."""
 @pytest.mark.parametrize(
     "plan_file",
     [
-        "docs/results/drone/comparison.yml",
-        "docs/results/drone/comparison-none.yml",
-        "docs/results/maze/comparison.yml",
+        "experiments/drone/comparison.yml",
+        "experiments/drone/comparison-none.yml",
+        "experiments/maze/comparison.yml",
     ],
 )
 def test_a_committed_plan_still_trains_what_its_committed_models_were_trained_with(plan_file):

@@ -12,7 +12,7 @@ reached): a pilot heading for the goal by either route, braking at half authorit
 the 3 m LiDAR range. At 0.8 s the one-cell corridor scores about 1.5 nats below the wide route at
 every speed; at 0.5 s they differ by only 0.4 nats, and 1.0 s adds little while its forward
 reach passes the LiDAR's range (unseen space counts as occupied) from 0.5 m/s on. The
-measurements are in the lab notebook, ``docs/results/protocol.md`` ("Moved from the code's
+measurements are in the lab notebook, ``experiments/protocol.md`` ("Moved from the code's
 comments").
 
 Observation (184 values, float32): goal − position (2, m), velocity (2, m/s), the 180 LiDAR

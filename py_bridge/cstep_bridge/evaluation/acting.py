@@ -14,7 +14,7 @@ PPO samples): one action per observation, by one of three rules.
 The two differ when s is large against |μ|: a squashed gSDE policy at the end of training carries
 s ≈ 2 against |μ| ≈ 3.5, so ``tanh(μ)`` saturates where the policy PPO trained acts, on average,
 far more gently; the mode is then a high-gain version of the trained behaviour, which chatters in
-limit cycles behind the waypoint controller's lag (the lab notebook, docs/results/protocol.md,
+limit cycles behind the waypoint controller's lag (the lab notebook, experiments/protocol.md,
 has the flights). Neither SB3 nor rl-zoo offers the expected action, so it is computed here: the
 mean of the action at :data:`QUANTILES` equally spaced quantiles of X. Both integrands are
 monotone in X and span at most the action box's width (2 for the drone's and the maze's [−1, 1]), so that mean is within

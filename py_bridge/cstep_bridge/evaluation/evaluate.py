@@ -1,7 +1,7 @@
 """Evaluate trained agents side by side on a fixed set of configurations, with the paper's metrics.
 
     python -m cstep_bridge.evaluate --model runs/drone-unempowered --model runs/drone-empowered-c1 \\
-        --out docs/results/drone
+        --out experiments/drone
 
 Models with the same label (``--label``, or by default the agent and its c from run.json, e.g.
 ``unempowered``, ``empowered c=0.5``) are one agent trained with several seeds. Every model flies
@@ -434,7 +434,7 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         choices=ACTING_RULES,
         default=DEFAULT_ACTING_RULE,
         help="how the trained policy acts: its mode (SB3's deterministic action), its expected "
-        "action under its own noise (docs/results/protocol.md, e01) or its action sampled as in "
+        "action under its own noise (experiments/protocol.md, e01) or its action sampled as in "
         "training, seeded per episode (e02; default: %(default)s)",
     )
     ap.add_argument(

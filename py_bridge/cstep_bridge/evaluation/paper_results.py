@@ -3,7 +3,7 @@
 From ``c-step-paper.tex``: Table "Success rate and time to clear the obstacle" (one agent each,
 100 map configurations) and Table "Percentage decrease in time spent near obstacles for empowered
 agents relative to unempowered baseline". The paper gives no seeds, spreads or tests; its success
-rate is most plausibly our ``cleared_rate`` (see ``docs/results/protocol.md``). Only the drone has
+rate is most plausibly our ``cleared_rate`` (see ``experiments/protocol.md``). Only the drone has
 numbers: the paper reports the point maze as a figure (the empowered agent takes the wide route).
 """
 

@@ -19,7 +19,7 @@ With ``moves: start`` the curriculum moves the *start* instead — to ``goal + f
 the same distance ``f`` of the way from the goal — and keeps the task's own goal (a reverse
 curriculum, as Florensa et al. 2017 grow starts back from the goal): the first levels then train
 the arrival at the task's goals, 49 of the 100 evaluation arenas' under 0.6 m from a wall (the
-table of ``docs/results/drone/failure_modes.py``), which partway goals (on the start–goal line,
+table of ``experiments/drone/failure_modes.py``), which partway goals (on the start–goal line,
 0.3 m clear of obstacles) never ask for until the last level. A moved start keeps the same 0.3 m
 clear, so where the line near the goal runs along the block it lies further out than its level.
 
@@ -28,7 +28,7 @@ within the env's success radius of the goal without a collision — the task's s
 counts one that *ended* there without a collision. Under ``reached`` a start a few tenths of a
 metre from the goal succeeds by passing it, so the first levels of a reverse curriculum are left
 before the agent can stop at a goal; ``held`` keeps the agent on them until it can (the drone
-sweep's failure: agents that circle 0.3 m from the goal, ``docs/results/protocol.md``). Only the
+sweep's failure: agents that circle 0.3 m from the goal, ``experiments/protocol.md``). Only the
 promotions change; the task, its reward and its success stay the same.
 
 Configured by a protocol's ``curriculum`` entry (see :mod:`~cstep_bridge.training.protocol`)::

@@ -5,7 +5,7 @@ the run's history for curves across seeds: ``training.csv`` (every training epis
 protocol validates).
 
     python -m cstep_bridge.export runs/drone-unempowered --which best \\
-        --out docs/results/drone/models/unempowered-pilot
+        --out experiments/drone/models/unempowered-pilot
 
 A training checkpoint also carries the optimiser's state (Adam's two moments per weight, twice
 the policy's size), which only continuing the training needs. The export keeps the policy and

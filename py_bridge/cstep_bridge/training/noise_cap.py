@@ -5,7 +5,7 @@ stay large: gSDE's noise for a state is ``θ · z(s)``, with ``θ ~ N(0, σ²)``
 ``z(s)`` the policy's latent features, whose size PPO does not control. Noise as large as the
 policy's mean drives it to bang-bang actions that keep away from walls, so goals near a wall are
 not reached. PPO's ``ent_coef`` is an incentive, not a bound, and neither SB3 nor rl-zoo has a
-schedule for the noise, hence this. What it did in the sweep: ``docs/results/protocol.md``.
+schedule for the noise, hence this. What it did in the sweep: ``experiments/protocol.md``.
 
 What it does: before each rollout, the noise std of each action component — the median over the
 last rollout's observations of ``sqrt(Σ_j z_j(s)² σ_jk²)`` — is measured, and where it exceeds the

@@ -26,7 +26,7 @@ from ..reward.collision import COLLISION_VALUES
 HYPERPARAMS = PACKAGE / "hyperparams"
 PROTOCOLS = ("paper", "tuned")
 """``paper``: the paper's settings (its appendix). ``tuned``: the sweep's choice
-(``docs/results/protocol.md`` records how it was found)."""
+(``experiments/protocol.md`` records how it was found)."""
 
 ACTIVATIONS = ("tanh", "relu")
 

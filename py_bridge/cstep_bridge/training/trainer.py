@@ -6,7 +6,7 @@ Hyperparameters come from a protocol (:mod:`~cstep_bridge.training.protocol`, fi
 ``--protocol paper`` (the default) is the paper's PPO settings — two hidden layers of 2048 and 512
 units (policy and value each), n_steps 2048, batch 64, γ 0.99, GAE λ 0.95, clip 0.2, learning rate
 3e-5, gSDE, 10 epochs, 1.5 M timesteps; ``--protocol tuned`` is the sweep's choice, under which
-agents learn the task (``docs/results/protocol.md``). Single options (``--gamma``, ``--net``, ...)
+agents learn the task (``experiments/protocol.md``). Single options (``--gamma``, ``--net``, ...)
 and ``--hyperparams KEY=VALUE`` override entries. Every agent of a comparison trains with the same
 protocol: the levers in it (normalisation, curriculum, model selection, ...) apply to all alike.
 An empowered agent's environments are scored together, one batch per vector step

@@ -16,7 +16,7 @@ use super::neighbours::NeighbourGrid;
 /// (whose hull then swallows the free band); smaller k fragments thin terminal layers into
 /// pieces whose hulls leave gaps. 8 splits thin terminal layers least while free bands two
 /// endpoint spacings wide still keep clusters apart; the ignored test `link_neighbours_study`
-/// measures the trade-off (results in `docs/results/protocol.md`, "Moved from the code's
+/// measures the trade-off (results in `experiments/protocol.md`, "Moved from the code's
 /// comments").
 pub(crate) const LINK_NEIGHBOURS: usize = 8;
 

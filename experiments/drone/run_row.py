@@ -1,5 +1,6 @@
-"""A finished sweep run's row for the run tables of ``experiments/protocol.md``, read from its
-directory, so that no figure is copied by hand:
+"""A finished sweep run's row, as the run tables of the sweep's record had them (the notebook
+before it was trimmed: ``git show f9ed875:experiments/protocol.md``), read from its directory, so
+that no figure is copied by hand:
 
     PYTHONPATH=py_bridge .venv/bin/python experiments/drone/run_row.py \\
         runs/sweep/d86-startcurr-lr1e4-seed11 --change "d50 + learning_rate=1e-4, seed 11"

@@ -1,6 +1,7 @@
 """Where every drone run of the sweep landed against the issue's bar: success against collisions on
-the 100 evaluation arenas, one point per run, read from the run tables of
-``experiments/protocol.md`` (the sweep's record; no flights, no training).
+the 100 evaluation arenas, one point per run, read from the run tables of the sweep's full
+record (the notebook before it was trimmed, ``git show f9ed875:experiments/protocol.md``; no
+flights, no training).
 
     PYTHONPATH=py_bridge .venv/bin/python experiments/drone/sweep_map.py --out experiments/drone/sweep_map.png
 
@@ -15,6 +16,7 @@ from __future__ import annotations
 
 import argparse
 import re
+import subprocess
 from pathlib import Path
 
 ROW = re.compile(r"^\| (d\d{2,3})-[^|]*\|.*\| (\d+(?:\.\d+)?) % / (\d+(?:\.\d+)?) % \|\s*$")
@@ -23,6 +25,8 @@ HEADER = "| run | change |"
 """How a run table's header starts."""
 RESULT_COLUMN = "| 100 arenas succ / coll |"
 """How the header of a run table whose last column is the 100-arena result ends."""
+RECORD = "f9ed875:experiments/protocol.md"
+"""The sweep's full record in git: the notebook with every run table, before it was trimmed."""
 
 PHASES = (
     ("d34–d49: 16 envs, goal curriculum", 34, 49),
@@ -59,12 +63,12 @@ MARKERS = "os^Dv"
 """Marker shapes the phases cycle through beside their colours."""
 
 
-def runs(protocol: Path) -> dict[str, tuple[float, float]]:
+def runs(record: str) -> dict[str, tuple[float, float]]:
     """Run number → (success %, collisions %) on the 100 arenas; a run listed twice (a result table
     and the sweep table) keeps its last row."""
     found: dict[str, tuple[float, float]] = {}
     in_result_table = False
-    for line in protocol.read_text().splitlines():
+    for line in record.splitlines():
         if line.startswith(HEADER):
             in_result_table = line.rstrip().endswith(RESULT_COLUMN)
         m = ROW.match(line)
@@ -87,12 +91,19 @@ def by_phase(found: dict[str, tuple[float, float]]) -> dict[str, list[str]]:
 
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--protocol", type=Path, default=Path("experiments/protocol.md"))
+    ap.add_argument("--protocol", type=Path, help=f"the record as a file (default: git's {RECORD})")
     ap.add_argument("--out", type=Path, default=Path("experiments/drone/sweep_map.png"))
     args = ap.parse_args()
-    found = runs(args.protocol)
+    if args.protocol:
+        source, record = str(args.protocol), args.protocol.read_text()
+    else:
+        source = RECORD
+        record = subprocess.run(
+            ["git", "show", RECORD], capture_output=True, text=True, check=True
+        ).stdout
+    found = runs(record)
     if not found:
-        raise SystemExit(f"{args.protocol}: no run rows with a 100-arena result")
+        raise SystemExit(f"{source}: no run rows with a 100-arena result")
 
     import matplotlib
 
@@ -121,7 +132,7 @@ def main() -> int:
     ax.set_ylim(-2, 100)
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8, loc="center left", bbox_to_anchor=(1.01, 0.5))
-    ax.set_title("Drone sweep: every evaluated run (unempowered, experiments/protocol.md)")
+    ax.set_title("Drone sweep: every evaluated run (unempowered, the sweep's record)")
     fig.tight_layout()
     fig.savefig(args.out, dpi=120)
     print(f"wrote {args.out}: {len(found)} runs")

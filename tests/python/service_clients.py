@@ -1,5 +1,5 @@
 """rclpy service clients (and a trivial rclpy server) as separate processes, for the tests and the
-benchmark of how the node's services answer real callers (issue 44).
+benchmark of how the node's services answer real callers.
 
 It inherits the caller's ``ROS_DOMAIN_ID`` and ``ROS_AUTOMATIC_DISCOVERY_RANGE`` and prints one
 JSON object on stdout when it is done:

@@ -142,7 +142,7 @@ def test_seed_intervals_cover_the_population_mean_and_the_iqm_resists_a_collapse
         covered += iv.low <= 70.0 <= iv.high
     assert covered >= 48  # nominal 95 %; percentile intervals on 10 seeds run a little short
     healthy = [72.0, 75.0, 78.0, 70.0, 74.0, 76.0, 73.0, 77.0, 71.0]
-    collapsed = [*healthy, 3.0]  # a seed that came apart (d260's 8 % / 5 %)
+    collapsed = [*healthy, 3.0]  # a seed that came apart (the sweep had one at 8 % / 5 %)
     assert comparison.seed_interval(collapsed, "mean").mean < 68
     iqm = comparison.seed_interval(collapsed, "iqm")
     assert iqm.mean == pytest.approx(np.mean(sorted(collapsed)[2:8]))  # trims 2.5 of 10 each end

@@ -1,5 +1,5 @@
 """A node stopped and continued (SIGSTOP, SIGCONT: a debugger break, a suspended laptop, an
-overloaded host) serves again every peer that was connected before the pause (issue 45).
+overloaded host) serves again every peer that was connected before the pause.
 
 A pause longer than the peers' participant lease (Fast DDS announces 20 s) used to cut those peers
 off for good: on resume the node's own lease check dropped them for its own stall, and never

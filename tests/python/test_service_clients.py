@@ -3,7 +3,7 @@
 batch requests in flight at once get every answer exactly once and the right one (matched to its
 request by the scans' stamps), on an idle and on a CPU-loaded machine; a client past the queue's
 limit gets its extra requests answered ``valid: false`` with the reason, counted in the
-diagnostics, not dropped (issue 44).
+diagnostics, not dropped.
 
 ``make bench-services`` times the same calls against the node and an rclpy server; these tests
 assert no time, only generous timeouts for answers that would otherwise never come.
@@ -96,7 +96,7 @@ def limited_node(ros_domain) -> Iterator[subprocess.Popen]:
 
 
 def test_new_one_shot_clients_each_get_their_first_answer(cstep_node):
-    # Issue 44: each new rclpy client's first answer took 3.01 s (its request reached the node
+    # A bug fixed: each new rclpy client's first answer took 3.01 s (its request reached the node
     # before the node had matched its writer, and was dropped until Fast DDS's next heartbeat).
     # Timed by `make bench-services`; here only: it comes, and is the answer to the request.
     for _ in range(3):
@@ -109,7 +109,7 @@ def test_new_one_shot_clients_each_get_their_first_answer(cstep_node):
 def test_pipelining_clients_get_every_answer_once_and_the_right_one(cstep_node, loaded, request):
     if loaded:
         request.getfixturevalue("cpu_load")
-    # Before issue 44, this left a client starved (0 of 8 answered, for good) and another short
+    # Before its fix, this left a client starved (0 of 8 answered, for good) and another short
     # of 4: a keep-last-10 request reader overwrote requests, and each batch was scored on the
     # DDS side, which meanwhile took no request off the reader.
     results = pipelining(clients=4, requests=40, in_flight=8, states=32)

@@ -434,8 +434,8 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
         choices=ACTING_RULES,
         default=DEFAULT_ACTING_RULE,
         help="how the trained policy acts: its mode (SB3's deterministic action), its expected "
-        "action under its own noise (experiments/protocol.md, e01) or its action sampled as in "
-        "training, seeded per episode (e02; default: %(default)s)",
+        "action under its own noise, or its action sampled as in training, seeded per episode "
+        "(default: %(default)s)",
     )
     ap.add_argument(
         "--jobs",

@@ -10,13 +10,7 @@ scores in parallel, and fills in the rewards. Each env gets exactly the reward i
 a node of its own (the same numbers, bit for bit), for one round trip instead of N and one node
 process instead of N, and with no ``/odom``, ``/scan``, ``/clock`` traffic for observers.
 
-Where the time of an empowered step went before (``py-spy --idle`` on the single-env trainer,
-tuned protocol, 117 steps/s, the machine's two cores shared with two other training runs): a
-third of the wall time was in the reward call — a quarter of that publishing the three simulation
-topics (which the node also had to receive), half sending the request (0.7 ms a call) and waiting
-for the reply, the rest building messages. On busy cores each message wakes the other process
-and its DDS threads; those wake-ups, more than the node's ~0.4 ms evaluation, are what dropping
-the topics and sending one request per vector step save.
+Why one call per vector step, and the profile that showed it: ``experiments/throughput.md``.
 
 With the envs' ``reward_source="inprocess"`` the wrapper asks no node: it scores the vector step
 with one :meth:`~cstep_bridge.reward.scoring.Scorer.score_batch` call in this process (the same scoring

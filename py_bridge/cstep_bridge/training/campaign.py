@@ -2,9 +2,9 @@
 a time, each resumed where it stopped and exported when it ends, so a campaign spread over several
 working days is one command, repeated until it says everything is done.
 
-    python -m cstep_bridge.campaign experiments/drone/comparison.yml --lanes 2
+    python -m cstep_bridge.campaign comparison.yml --lanes 2
 
-The plan (YAML)::
+The plan (YAML; the verdict's own is ``experiments/drone/verdict.yml`` in a checkout)::
 
     env: drone
     protocol: tuned
@@ -12,7 +12,7 @@ The plan (YAML)::
     agents: [unempowered, c10, c1, c0.5]   # "unempowered" or "c<safety coefficient>"
     seeds: [11, 12, 13]
     runs: runs/cmp/drone                    # run directories: <runs>/<agent>-s<seed>
-    models: experiments/drone/models       # exports of the best-validation models, same names
+    models: models/drone                    # exports of the best-validation models, same names
     train_args: [--vec-env, dummy]          # optional: more `cstep_bridge.train` arguments
 
 Runs start in seed-major order (every agent's first seed before any second seed), so a campaign

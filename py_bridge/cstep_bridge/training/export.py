@@ -5,7 +5,7 @@ the run's history for curves across seeds: ``training.csv`` (every training epis
 protocol validates).
 
     python -m cstep_bridge.export runs/drone-unempowered --which best \\
-        --out experiments/drone/models/unempowered-pilot
+        --out models/drone-unempowered
 
 A training checkpoint also carries the optimiser's state (Adam's two moments per weight, twice
 the policy's size), which only continuing the training needs. The export keeps the policy and

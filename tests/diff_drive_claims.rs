@@ -1,7 +1,7 @@
-//! The paper's qualitative claims on the wheeled model (the Husky from its URDF): walls lower
-//! the score, and driving at a wall scores below driving away from it (measured: a 1.8 m
-//! corridor −0.20 and a 1.4 m one −1.14 against 0.05 in open space; at 1 m/s with a wall 1.2 m
-//! ahead −0.91 against −0.52 driving away).
+//! The paper's qualitative claims on the wheeled model (the Husky from its URDF, turning on the
+//! skid steer's effective track): walls lower the score, and driving at a wall scores below
+//! driving away from it (measured: a 1.6 m corridor −0.60 and a 1.2 m one −1.60 against −0.38
+//! in open space; at 1 m/s with a wall 1.2 m ahead −1.45 against −1.04 driving away).
 
 mod common;
 
@@ -36,10 +36,11 @@ fn open_space_scores_above_a_wide_corridor_above_a_narrow_one() {
     let e = husky();
     let still = Vector3::zeros();
     let open = score(&e, &Scene::open(), 0.0, still);
-    // The Husky is 0.69 m wide (its disks 0.85 m): 1.8 m leaves it 0.48 m either side, 1.4 m
-    // 0.28 m. (From 2.5 m on, nothing it reaches in 1 s touches the walls.)
-    let wide = score(&e, &Scene::corridor(1.8, 20.0), 0.0, still);
-    let narrow = score(&e, &Scene::corridor(1.4, 20.0), 0.0, still);
+    // The Husky is 0.69 m wide (its disks 0.85 m): 1.6 m leaves it 0.46 m either side, 1.2 m
+    // 0.26 m. (From 1.8 m on, nothing it reaches in 1 s touches the walls: it turns too slowly
+    // to swing its corners out that far.)
+    let wide = score(&e, &Scene::corridor(1.6, 20.0), 0.0, still);
+    let narrow = score(&e, &Scene::corridor(1.2, 20.0), 0.0, still);
     assert!(open.valid() && wide.valid() && narrow.valid());
     assert!(
         open.empowerment > wide.empowerment + 0.1 && wide.empowerment > narrow.empowerment + 0.1,

@@ -10,7 +10,7 @@ use std::path::Path;
 
 use approx::assert_relative_eq;
 use common::estimator;
-use cstep::model::diff_drive::{DiffDrive, HEADING, RIM_SPEEDS};
+use cstep::model::diff_drive::{DiffDrive, HEADING, RIM_SPEEDS, SKID_STEER_SEPARATION_MULTIPLIER};
 use cstep::model::wheeled::WheeledDescription;
 use cstep::model::{Batch, CommandAxes, Dynamics};
 use cstep::occupancy::{Occupancy, OccupancyOptions, Scan, UnknownSpace};
@@ -22,12 +22,13 @@ use rand_chacha::ChaCha8Rng;
 /// Rim speed and acceleration bounds, m/s and m/s² (the parameters' defaults).
 const V: f64 = 1.0;
 const A: f64 = 3.0;
-/// The Husky's track, m.
-const TRACK: f64 = 2.0 * 0.2854;
+/// The Husky's effective track, m: its geometric one (the wheel joints at y = ±0.2854) times
+/// the skid steer's default multiplier.
+const TRACK: f64 = 2.0 * 0.2854 * SKID_STEER_SEPARATION_MULTIPLIER;
 
 fn husky() -> DiffDrive {
     let d = WheeledDescription::load(Path::new("urdf/husky.urdf")).unwrap();
-    DiffDrive::new(&d, V, A)
+    DiffDrive::new(&d, V, A, None)
 }
 
 /// The distance a rim covers in `t` seconds from rest at full acceleration, capped at `V`.
@@ -124,7 +125,7 @@ fn opposite_rims_spin_the_robot_on_the_spot() {
 #[test]
 fn one_rim_pivots_the_robot_about_the_other_wheel() {
     // The left rim stays still; the centre swings on a circle of radius track/2 about the left
-    // wheel, through the angle s(T)/track.
+    // side's instantaneous centre (the effective track's, not the wheel's), through s(T)/track.
     let model = husky();
     let x = drive(&model, &rest(), [0.0, 1.0], 100);
     let angle = rim_distance(1.0) / TRACK;

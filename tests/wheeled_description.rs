@@ -6,7 +6,7 @@ use std::path::Path;
 
 use approx::assert_relative_eq;
 use cstep::estimator::Estimator;
-use cstep::model::diff_drive::{Bound, DiffDrive};
+use cstep::model::diff_drive::{Bound, DiffDrive, SKID_STEER_SEPARATION_MULTIPLIER};
 use cstep::model::urdf::UrdfError;
 use cstep::model::wheeled::WheeledDescription;
 use cstep::model::Dynamics;
@@ -66,7 +66,7 @@ fn the_huskys_wheels_mass_and_outline_come_from_its_urdf() {
 
 #[test]
 fn the_huskys_footprint_is_two_disks_that_cover_it() {
-    let model = DiffDrive::new(&husky(), 1.0, 3.0);
+    let model = DiffDrive::new(&husky(), 1.0, 3.0, None);
     let footprint = model.footprint();
     let (half_length, half_width) = (1.0074 / 2.0, 0.2854 + 0.1143 / 2.0);
     assert_eq!(footprint.centres().len(), 2);
@@ -81,6 +81,35 @@ fn the_huskys_footprint_is_two_disks_that_cover_it() {
     assert_eq!(model.max_speed(), Bound::Parameter(1.0));
     assert_eq!(model.max_acceleration(), Bound::Parameter(3.0));
     assert_relative_eq!(model.collision_height(), 0.40366, epsilon = 1e-6);
+}
+
+#[test]
+fn a_skid_steer_turns_on_a_wider_track_than_a_two_wheeled_drive() {
+    // The Husky (two wheels a side) turns on Clearpath's calibrated 1.875 × its track unless
+    // told otherwise; welding its rear wheels makes it a two-wheeled drive, which turns on its
+    // geometric track.
+    let track = 2.0 * 0.2854;
+    let skid = DiffDrive::new(&husky(), 1.0, 3.0, None);
+    assert_eq!(
+        skid.separation_multiplier(),
+        SKID_STEER_SEPARATION_MULTIPLIER
+    );
+    assert_relative_eq!(skid.effective_track(), 1.875 * track, epsilon = 1e-12);
+    let calibrated = DiffDrive::new(&husky(), 1.0, 3.0, Some(1.5));
+    assert_relative_eq!(calibrated.effective_track(), 1.5 * track, epsilon = 1e-12);
+    let text = ["rear_left_wheel", "rear_right_wheel"]
+        .iter()
+        .fold(husky_text(), |t, j| {
+            t.replace(
+                &format!(r#"<joint name="{j}" type="continuous">"#),
+                &format!(r#"<joint name="{j}" type="fixed">"#),
+            )
+        });
+    let two = WheeledDescription::from_str(&text, "husky, rear wheels welded").unwrap();
+    assert_eq!(two.wheels.len(), 2);
+    let pair = DiffDrive::new(&two, 1.0, 3.0, None);
+    assert_eq!(pair.separation_multiplier(), 1.0);
+    assert_relative_eq!(pair.effective_track(), two.track, epsilon = 1e-12);
 }
 
 #[test]
@@ -99,7 +128,7 @@ fn joint_limits_in_the_urdf_set_the_bounds() {
     let turning = force * 0.2854f64.powi(2) / d.yaw_inertia;
     assert!(turning < straight);
     assert_relative_eq!(d.max_rim_acceleration().unwrap(), turning, epsilon = 1e-12);
-    let model = DiffDrive::new(&d, 1.0, 3.0);
+    let model = DiffDrive::new(&d, 1.0, 3.0, None);
     assert_eq!(model.max_speed(), Bound::Urdf(5.0 * 0.17775));
     assert_eq!(model.max_acceleration(), Bound::Urdf(turning));
 }

@@ -6,6 +6,7 @@ door, check_env, the empowered reward in process and from a live `cstep node` ov
 import json
 import math
 
+import cstep_scoring
 import gymnasium as gym
 import numpy as np
 import pytest
@@ -15,7 +16,15 @@ from cstep_bridge.envs.husky import NODE_PARAMS, CStepHuskyEnv
 from cstep_bridge.errors import ConfigError
 from cstep_bridge.evaluation.flights import configurations
 from cstep_bridge.reward.collision import held_return
-from cstep_bridge.sim.husky import HUSKY_HALL, MAX_SPEED, PALLETS, Hall, HuskyParams
+from cstep_bridge.sim.husky import (
+    HUSKY_HALL,
+    HUSKY_URDF,
+    MAX_SPEED,
+    PALLETS,
+    Hall,
+    HuskyParams,
+    HuskySim,
+)
 from cstep_bridge.training.selection import validation_set
 from cstep_bridge.training.trainer import parse_args, run_settings
 from gymnasium.utils.env_checker import check_env as gym_check_env
@@ -41,10 +50,42 @@ def test_the_drive_reads_the_huskys_wheels_and_chassis_from_its_urdf():
     assert params.right_joints == ("front_right_wheel", "rear_right_wheel")
     assert params.half_width == pytest.approx(0.2854 + 0.1143 / 2, abs=1e-12)  # wheels' faces
     assert params.chassis_top == pytest.approx(0.14493 + 0.12498 + 0.2675 / 2, abs=1e-12)
+    assert params.separation_multiplier == 1.875  # a skid steer: Clearpath's calibration
+    assert params.effective_track == pytest.approx(1.875 * 2 * 0.2854, abs=1e-12)
     # Rims at the top speed, together: a turn keeps its radius, a spin its sense.
+    half = 1.875 * 0.2854
     assert params.rim_speeds(1.0, 0.0) == pytest.approx([1.0, 1.0])
-    assert params.rim_speeds(1.0, 1.0) == pytest.approx([(1 - 0.2854) / (1 + 0.2854), 1.0])
+    assert params.rim_speeds(1.0, 1.0) == pytest.approx([(1 - half) / (1 + half), 1.0])
     assert params.rim_speeds(0.0, -10.0) == pytest.approx([MAX_SPEED, -MAX_SPEED])
+
+
+def test_the_simulated_husky_turns_as_the_cores_skid_steer_model_says():
+    """Rims at top speed in opposite directions: PyBullet's Husky spins at the rate the core's
+    diff_drive model gives it on the effective track (Clearpath's calibration), within 10 %, on
+    every heading; driving straight it keeps the commanded speed and heading. With the wheels'
+    full sideways friction it spun at 1.0 rad/s of the model's 1.87."""
+    model_rate = (
+        2 * MAX_SPEED / cstep_scoring.wheeled_description(str(HUSKY_URDF))["effective_track"]
+    )
+    sim = HuskySim()
+
+    def drive(start: tuple[float, float, float], v: float, omega: float) -> tuple[float, float]:
+        """Median turn rate and speed over the last 2 s of 3 s driven from ``start``."""
+        sim.reset(Hall(start=np.array(start[:2]), yaw=start[2]))
+        states = [sim.step(v, omega) for _ in range(30)][10:]
+        rates = [s.angular_velocity[2] for s in states]
+        return float(np.median(rates)), float(
+            np.median([np.linalg.norm(s.velocity[:2]) for s in states])
+        )
+
+    try:
+        for heading in (0.0, 1.0, 2.0):
+            rate, _ = drive((6.5, 0.0, heading), 0.0, 10.0)
+            assert rate == pytest.approx(model_rate, rel=0.1), heading
+        rate, speed = drive((4.8, 0.0, 0.0), MAX_SPEED, 0.0)
+        assert abs(rate) < 0.01 and speed == pytest.approx(MAX_SPEED, rel=0.02)
+    finally:
+        sim.close()
 
 
 def test_the_hall_is_the_files_and_every_drawn_task_needs_the_door():

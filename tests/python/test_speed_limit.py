@@ -83,10 +83,12 @@ class Nav2Rig(Rig):
             self.executor,
         )
 
-    def feed_stamped(self, stamps_ns: list[int], width: float = 2.5, rate_hz: float = 20.0):
-        """Odometry and a corridor scan per stamp (nanoseconds), at ``rate_hz``."""
+    def feed_stamped(
+        self, stamps_ns: list[int], width: float = 2.5, rate_hz: float = 20.0, vx: float = 0.5
+    ):
+        """Odometry at ``vx`` m/s and a corridor scan per stamp (nanoseconds), at ``rate_hz``."""
         for ns in stamps_ns:
-            self.odom.publish(odometry())
+            self.odom.publish(odometry(vx))
             self.scan.publish(corridor_scan(ns // 10**9, width=width, nanosec=ns % 10**9))
             self.spin_for(1.0 / rate_hz)
 
@@ -128,6 +130,32 @@ def test_speed_limit_is_off_by_default(rig):
 WIDTHS = (1.2, 2.5)
 
 
+def published_limits(ros_context, executor, params, widths, vx=0.5):
+    """The limits a node started with ``params`` publishes for corridor scans of ``widths``,
+    alternating, one a second of scan time (far enough apart for the 10 Hz rate limit), the
+    odometry at ``vx`` m/s: ``(width, limit, score)`` each, ``score`` the node's own score of
+    that scan where the rig received it (else None)."""
+    proc = start_node("publish_speed_limit:=true", *params)
+    try:
+        rig = Nav2Rig(ros_context, executor)
+        rig.matched()
+        rig.warm_up()
+        rig.limits.clear()
+        sent = {(5000 + k) * 10**9: widths[k % len(widths)] for k in range(8)}
+        for ns, width in sent.items():
+            rig.feed_stamped([ns], width=width, rate_hz=10.0, vx=vx)
+        wait_until(lambda: len(rig.limits) >= 6, "six speed limits", executor, timeout=10)
+        rig.spin_for(0.3)
+        scored = {stamp_ns(e): e.empowerment for e in rig.empowerment}
+        for limit in rig.limits:
+            assert limit.percentage is True
+            assert limit.header.frame_id == "odom"
+        # Each limit is stamped with its scan's stamp.
+        return [(sent[stamp_ns(m)], m, scored.get(stamp_ns(m))) for m in rig.limits]
+    finally:
+        stop_gently(proc)
+
+
 def test_speed_limit_is_what_the_mapping_says_for_known_scans(tmp_path, ros_context, executor):
     scores = {
         w: cstep_eval(tmp_path, odometry(), corridor_scan(1, width=w))["empowerment"]
@@ -138,37 +166,39 @@ def test_speed_limit_is_what_the_mapping_says_for_known_scans(tmp_path, ros_cont
     full_speed_at, span = high + 0.25, (high - low) + 0.5
     expected = {w: percent(e, full_speed_at, span) for w, e in scores.items()}
     assert all(FLOOR < p < 100.0 for p in expected.values()), expected
-    proc = start_node(
-        "publish_speed_limit:=true",
-        f"speed_limit_full_speed_at:={full_speed_at!r}",
-        f"speed_limit_span:={span!r}",
-    )
-    try:
-        rig = Nav2Rig(ros_context, executor)
-        rig.matched()
-        rig.warm_up()
-        rig.limits.clear()
-        # One scan a second of scan time: far enough apart for the 10 Hz rate limit.
-        sent = {(5000 + k) * 10**9: WIDTHS[k % 2] for k in range(8)}
-        for ns, width in sent.items():
-            rig.feed_stamped([ns], width=width, rate_hz=10.0)
-        wait_until(lambda: len(rig.limits) >= 6, "six speed limits", executor, timeout=10)
-        rig.spin_for(0.3)
-        scored = {stamp_ns(e): e for e in rig.empowerment}
-        checked = 0
-        for limit in rig.limits:
-            width = sent[stamp_ns(limit)]  # stamped with its scan's stamp
-            assert limit.percentage is True
-            assert limit.speed_limit == expected[width], (width, scores[width], limit)
-            assert limit.header.frame_id == "odom"
-            score = scored.get(stamp_ns(limit))
-            if score is not None:
-                assert score.empowerment == scores[width], "the node scores as cstep eval does"
-                checked += 1
-        assert checked >= 5
-        assert {sent[stamp_ns(m)] for m in rig.limits} == set(WIDTHS)
-    finally:
-        stop_gently(proc)
+    params = [f"speed_limit_full_speed_at:={full_speed_at!r}", f"speed_limit_span:={span!r}"]
+    published = published_limits(ros_context, executor, params, WIDTHS)
+    for width, limit, score in published:
+        assert limit.speed_limit == expected[width], (width, scores[width], limit)
+        assert score in (None, scores[width]), "the node scores as cstep eval does"
+    assert sum(score is not None for _, _, score in published) >= 5
+    assert {width for width, _, _ in published} == set(WIDTHS)
+
+
+HUSKY = {"model": "diff_drive", "robot_description": "builtin:husky.urdf", "volume_dims": "2"}
+"""A node scoring the Husky (its URDF as shipped), everything else its defaults."""
+
+
+def test_a_wheeled_robot_gets_its_models_own_threshold_and_span(tmp_path, ros_context, executor):
+    """Unset, the mapping is the model's own: diff_drive's −1.05 and 0.7 (measured on the
+    Husky's scores). At its top speed the Husky gets full speed in a 4 m corridor (nothing within
+    its reach) and less in a 1.4 m one (the demo's door); the drone's 1.5 would hold it at the floor in both."""
+    widths = (1.4, 4.0)
+    scores = {
+        w: cstep_eval(tmp_path, odometry(vx=1.0), corridor_scan(1, width=w), params=HUSKY)[
+            "empowerment"
+        ]
+        for w in widths
+    }
+    expected = {w: percent(e, -1.05, 0.7) for w, e in scores.items()}
+    assert expected[4.0] == 100.0 and FLOOR < expected[1.4] < 100.0, (scores, expected)
+    assert all(percent(e, 1.5, 1.5) == FLOOR for e in scores.values()), scores
+    params = [f"{name}:={value}" for name, value in HUSKY.items()]
+    published = published_limits(ros_context, executor, params, widths, vx=1.0)
+    for width, limit, score in published:
+        assert limit.speed_limit == expected[width], (width, scores[width], limit)
+        assert score in (None, scores[width]), "the node scores as cstep eval does"
+    assert {width for width, _, _ in published} == set(widths)
 
 
 def test_echo_prints_the_limit_the_controller_server_receives(nav2, echo):

@@ -211,6 +211,7 @@ impl Estimator {
                 &wheeled_description(settings)?,
                 settings.wheel_max_speed,
                 settings.wheel_max_acceleration,
+                settings.wheel_separation_multiplier,
             )),
         };
         let occupancy = OccupancyOptions {

@@ -12,6 +12,17 @@
 
 use std::time::Duration;
 
+use crate::parameters::ModelKind;
+
+/// A threshold and span where the parameters leave them unset (`.nan`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MappingDefaults {
+    /// Empowerment (nats) at and above which the robot may go at full speed.
+    pub full_speed_at: f64,
+    /// Nats below `full_speed_at` over which the limit falls to the floor.
+    pub span: f64,
+}
+
 /// The declared mapping from an empowerment score to a speed limit.
 ///
 /// With `t = clamp((empowerment − (full_speed_at − span)) / span, 0, 1)`, the limit is
@@ -59,6 +70,25 @@ impl Limit {
 }
 
 impl SpeedLimitMapping {
+    /// The threshold and span a model's robot gets by default, from what it scores: the
+    /// quadrotor's and the point mass's from the Crazyflie in the paper's arena (1.38 nats at
+    /// 0.35 m from a wall, 1.86 in the open: full speed at 1.5, the floor at 0); the wheeled
+    /// model's from the Husky in its hall at its top speed (`experiments/husky/
+    /// speed_limit_scores.md`: 95 % of the open states score −1.04 or more, the states within
+    /// 0.6 m of an obstacle −1.72 at the median: full speed at −1.05, the floor at −1.75).
+    pub fn model_defaults(model: ModelKind) -> MappingDefaults {
+        match model {
+            ModelKind::Quadrotor | ModelKind::PointMass => MappingDefaults {
+                full_speed_at: 1.5,
+                span: 1.5,
+            },
+            ModelKind::DiffDrive => MappingDefaults {
+                full_speed_at: -1.05,
+                span: 0.7,
+            },
+        }
+    }
+
     /// The percentage of full speed allowed at `empowerment`: in `floor..=100`, never NaN,
     /// monotone non-decreasing in the score.
     pub fn percent(&self, empowerment: f64) -> f64 {

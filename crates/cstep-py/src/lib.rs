@@ -14,7 +14,9 @@ use std::path::{Path, PathBuf};
 
 use cstep_core::estimator::Estimator;
 use cstep_core::input::{self, ScanGeometry};
+use cstep_core::model::diff_drive::DiffDrive;
 use cstep_core::model::urdf::RobotDescription;
+use cstep_core::model::wheeled::WheeledDescription;
 use cstep_core::occupancy::ScanFrame;
 use cstep_core::parameters::{self, is_urdf_text, ParameterSet, DEFAULT_NODE_NAME};
 use cstep_core::scoring::{admit, score, unscorable, Score};
@@ -369,7 +371,46 @@ fn robot_description<'py>(py: Python<'py>, urdf: &str) -> PyResult<Bound<'py, Py
     Ok(dict)
 }
 
-/// The `cstep_scoring` module: [`Scorer`]; [`robot_description`]; and `PAPER_WORLD_JSON`, the
+/// ``wheeled_description(urdf)``: the wheeled robot as the core's ``diff_drive`` model reads it
+/// from a URDF (a path or the XML text), so the Python simulation can check that it drives the
+/// robot the scorer models. A dict: ``name``, ``wheel_radius`` (m, the mean), ``track`` (m, the
+/// geometric one), ``separation_multiplier`` (the model's default for this drive) and
+/// ``effective_track`` (m, their product), ``left_joints`` and ``right_joints`` (the wheel joints
+/// by side, in file order), ``mass`` (kg), ``outline_y`` and ``outline_z`` (m, the chassis's and
+/// wheels' extent). A URDF the core refuses raises ``ValueError`` with the core's message.
+#[pyfunction]
+fn wheeled_description<'py>(py: Python<'py>, urdf: &str) -> PyResult<Bound<'py, PyDict>> {
+    let description = if is_urdf_text(urdf) {
+        WheeledDescription::from_str(urdf, "robot_description (URDF text)")
+    } else {
+        WheeledDescription::load(Path::new(urdf))
+    }
+    .map_err(|e| PyValueError::new_err(e.to_string()))?;
+    // Any bounds do: only the drive's default multiplier is read.
+    let drive = DiffDrive::new(&description, 1.0, 1.0, None);
+    let side = |left: bool| -> Vec<&str> {
+        let wheels = description.wheels.iter();
+        wheels
+            .filter(|w| (w.centre.y > 0.0) == left)
+            .map(|w| w.joint.as_str())
+            .collect()
+    };
+    let dict = PyDict::new(py);
+    dict.set_item("name", &description.name)?;
+    dict.set_item("wheel_radius", description.wheel_radius)?;
+    dict.set_item("track", description.track)?;
+    dict.set_item("separation_multiplier", drive.separation_multiplier())?;
+    dict.set_item("effective_track", drive.effective_track())?;
+    dict.set_item("left_joints", side(true))?;
+    dict.set_item("right_joints", side(false))?;
+    dict.set_item("mass", description.mass)?;
+    dict.set_item("outline_y", description.outline.y)?;
+    dict.set_item("outline_z", description.outline.z)?;
+    Ok(dict)
+}
+
+/// The `cstep_scoring` module: [`Scorer`]; [`robot_description`]; [`wheeled_description`]; and
+/// `PAPER_WORLD_JSON`, the
 /// paper's world as the core compiled it in (`config/paper_world.json`), for the Python side to
 /// check its own copy against.
 #[pymodule]
@@ -379,5 +420,6 @@ fn cstep_scoring(module: &Bound<'_, PyModule>) -> PyResult<()> {
         cstep_core::demo::arena::PAPER_WORLD_JSON,
     )?;
     module.add_function(wrap_pyfunction!(robot_description, module)?)?;
+    module.add_function(wrap_pyfunction!(wheeled_description, module)?)?;
     module.add_class::<Scorer>()
 }

@@ -10,8 +10,9 @@ so the task needs the door; ``hall`` or ``options["hall"]`` fixes one.
 Observation (364 values, float32): the goal's offset in the body frame (x forward, y left; 2,
 m), the forward speed (m/s) and turn rate (rad/s) from the odometry, and the 360 LiDAR ranges
 clipped to [0, 10] m (no return = 10 m), all of them (the drone's scan is not downsampled
-either). Action: (v, ω) in [−1, 1]², scaled to ±1 m/s and ±2·(1 m/s)/track (the turn rate of
-the rims at top speed in opposite directions); the drive keeps each rim within 1 m/s and
+either). Action: (v, ω) in [−1, 1]², scaled to ±1 m/s and ±2·(1 m/s)/(1.875 × track), 1.87 rad/s
+(the turn rate of the rims at top speed in opposite directions, on the skid steer's calibrated
+effective track); the drive keeps each rim within 1 m/s and
 3 m/s² (:class:`~cstep_bridge.sim.husky.HuskySim`). 10 Hz control. Reward: ``exp(−‖p − goal‖)``
 (``empowered=False``) or the empowered reward ``exp(−‖p − goal‖) · log(c · λ(R_free))`` of
 exactly this state, from a ``cstep node`` running ``model:=diff_drive`` on the same URDF
@@ -36,6 +37,7 @@ from ..sim.husky import (
     HUSKY_URDF,
     MAX_ACCELERATION,
     MAX_SPEED,
+    SEPARATION_MULTIPLIER,
     Hall,
     HuskySim,
 )
@@ -51,9 +53,10 @@ NODE_PARAMS = {
     "robot_description": str(HUSKY_URDF),
     "wheel_max_speed": repr(MAX_SPEED),
     "wheel_max_acceleration": repr(MAX_ACCELERATION),
+    "wheel_separation_multiplier": repr(SEPARATION_MULTIPLIER),
 }
 """`cstep node` parameters for the Husky: the wheeled model on the URDF the simulation loads,
-with the drive's bounds; pass them to a bridge given to the env."""
+with the drive's bounds and effective track; pass them to a bridge given to the env."""
 
 
 class CStepHuskyEnv(EmpoweredRewardEnv):

@@ -14,13 +14,19 @@ The robot is pybullet_data's ``husky/husky.urdf`` as shipped (the file ``urdf/hu
 core's built-in Husky, was copied from). What the drive needs is read from it
 (:class:`HuskyParams`): the wheel joints and their collision cylinders give the wheel radius
 and the track, as the core's ``diff_drive`` model reads them. A command ``(v, ω)`` becomes rim
-speeds ``v ∓ ω·track/2`` (left, right), scaled together so neither exceeds the top speed, which
-each rim then approaches at no more than the acceleration bound; every wheel of a side turns at
-its side's speed (skid steer), held by PyBullet's velocity motors. The bounds are Clearpath's
-figures, the node's ``wheel_max_speed`` and ``wheel_max_acceleration`` defaults (the URDF's
-continuous joints give none). Skid steering slips in PyBullet much as on a real floor: driving
-straight the body keeps the commanded speed, but a turn reaches only part of ``ω`` (the
-core's model turns without slip, so it overestimates how fast the Husky can turn away).
+speeds ``v ∓ ω·track'/2`` (left, right) on the effective track ``track' = track × 1.875``, as
+the Husky's ``diff_drive_controller`` converts it, scaled together so neither exceeds the top
+speed, which each rim then approaches at no more than the acceleration bound; every wheel of a
+side turns at its side's speed (skid steer), held by PyBullet's velocity motors. The bounds are
+Clearpath's figures, the node's ``wheel_max_speed`` and ``wheel_max_acceleration`` defaults (the
+URDF's continuous joints give none). A skid steer's wheels scrub sideways in a turn: Clearpath
+calibrated the Husky's effective track at 1.875 times its geometric one, which the core's model
+turns on (``wheel_separation_multiplier``). PyBullet's wheels, gripping sideways as firmly as
+forward, scrubbed far more (spinning at top rim speed, 1.0 rad/s: a multiplier of 3.5); their
+sideways friction is scaled (:data:`WHEEL_SIDEWAYS_FRICTION`) so that the simulated Husky spins
+as the calibrated one does. The slip still grows with the turn's tightness and speed, as on a
+floor, which one multiplier cannot follow (at half the top rim speed the spin is 0.73 rad/s
+against the model's 0.93).
 
 Physics at 240 Hz, control at 10 Hz (24 physics steps): the rate a LiDAR scans, the demo's.
 The odometry is the root link's (``base_footprint``, on the ground): its pose, and its twist,
@@ -74,6 +80,15 @@ MAX_SPEED = 1.0
 MAX_ACCELERATION = 3.0
 """Each rim's acceleration bound (m/s²): the limit Clearpath's drive controller ships with,
 the node's ``wheel_max_acceleration``."""
+SEPARATION_MULTIPLIER = 1.875
+"""The Husky's effective track over its geometric one: Clearpath's calibration
+(``husky_control/config/control.yaml``, ``wheel_separation_multiplier``), the core's default for
+a skid steer."""
+WHEEL_SIDEWAYS_FRICTION = 0.63
+"""The wheels' friction along their axles, as a fraction of along their rolling direction
+(PyBullet's anisotropic friction): with it the simulated Husky, spinning at the top rim speed,
+turns at 2·(1 m/s)/(1.875 × track), 1.87 rad/s, as the calibrated one does (1.77–1.93 rad/s
+over headings; 1.01 rad/s with full sideways friction)."""
 WHEEL_TORQUE = 100.0
 """The wheel motors' torque bound (N·m): enough that the acceleration bound, not the motors,
 limits the drive (the URDF gives no effort limit)."""
@@ -95,6 +110,9 @@ class HuskyParams:
     """Half the width of the body and wheels (m): the clearance it needs beside it."""
     chassis_top: float
     """The height of the chassis's collision box's top above the root frame (m): the LiDAR's."""
+    separation_multiplier: float
+    """The effective track over the geometric one: :data:`SEPARATION_MULTIPLIER` for a skid
+    steer (more than one wheel a side), 1 otherwise, as the core's default."""
 
     @classmethod
     def from_urdf(cls, path: Path | str = HUSKY_URDF) -> HuskyParams:
@@ -137,17 +155,24 @@ class HuskyParams:
                 )
             ),
             chassis_top=float(max(c[2] + s[2] / 2 for c, s in boxes)),
+            separation_multiplier=SEPARATION_MULTIPLIER if max(len(left), len(right)) > 1 else 1.0,
         )
+
+    @property
+    def effective_track(self) -> float:
+        """The track the drive turns on (m): ``ω = (v_right − v_left) / effective_track``."""
+        return self.track * self.separation_multiplier
 
     @property
     def max_turn_rate(self) -> float:
         """The turn rate (rad/s) of the rims at top speed in opposite directions."""
-        return 2 * MAX_SPEED / self.track
+        return 2 * MAX_SPEED / self.effective_track
 
     def rim_speeds(self, v: float, omega: float) -> np.ndarray:
         """The (left, right) rim speeds (m/s) of forward speed ``v`` and turn rate ``omega``,
         scaled together (the same turning radius) so neither exceeds :data:`MAX_SPEED`."""
-        rims = np.array([v - omega * self.track / 2, v + omega * self.track / 2])
+        half = omega * self.effective_track / 2
+        rims = np.array([v - half, v + half])
         fastest = np.abs(rims).max()
         return rims * (MAX_SPEED / fastest) if fastest > MAX_SPEED else rims
 
@@ -254,6 +279,13 @@ class HuskySim(PhysicsWorld):
             for j in range(p.getNumJoints(self.robot, physicsClientId=cid))
         }
         self.wheels = [index[n] for n in (*self.params.left_joints, *self.params.right_joints)]
+        for wheel in self.wheels:
+            p.changeDynamics(
+                self.robot,
+                wheel,
+                anisotropicFriction=(1.0, WHEEL_SIDEWAYS_FRICTION, 1.0),
+                physicsClientId=cid,
+            )
         self.reset()
 
     def reset(self, hall: Hall | None = None) -> DroneState:

@@ -7,9 +7,12 @@
 //! with each rim's speed kept within the speed bound (a rim at its top speed is not pushed
 //! further). Piecewise-constant wheel accelerations at their bounds — the default bang-bang
 //! sampler — are the drive's extreme controls, as for the drone. A skid steer (the Husky, four
-//! wheels) is driven as a differential drive on its geometric track: it turns about the
-//! centroid of its wheels, its left wheels at one speed, its right ones at another; side slip,
-//! which lets a real skid steer turn a little slower than that, is not modelled.
+//! wheels) is driven as a differential drive about the centroid of its wheels, its left wheels
+//! at one speed, its right ones at another, on an effective track wider than the geometric one
+//! ([`DiffDrive::effective_track`]): its wheels scrub sideways in a turn, so it turns slower
+//! than its rims would without slip. That is how ros2_control's `diff_drive_controller` drives
+//! and odometers a skid steer (its `wheel_separation_multiplier`; Clearpath calibrated 1.875
+//! for the Husky); the turn's slip varies with its radius, which one multiplier cannot follow.
 //!
 //! Bounds: the rim speed from the wheel joints' `<limit velocity>` (times the radius), the rim
 //! acceleration from their `<limit effort>` against the mass and yaw inertia
@@ -27,7 +30,7 @@
 //!
 //! The heading is kept as its cosine and sine so that neither the equations nor the footprint
 //! checks evaluate a trigonometric function. Equations of motion, with `v = (v_l + v_r)/2`,
-//! `ω = (v_r − v_l)/track` and `(a_x, a_y)` the drive centre in the root frame:
+//! `ω = (v_r − v_l)/effective_track` and `(a_x, a_y)` the drive centre in the root frame:
 //! `ṗ = v·(cos θ, sin θ) − ω·R(θ)·(−a_y, a_x)` (the root frame's origin moves with the drive
 //! centre and around it), `(cos θ, sin θ)˙ = ω·(−sin θ, cos θ)`, `v̇_l = a_l`, `v̇_r = a_r`.
 
@@ -78,6 +81,11 @@ impl Bound {
     }
 }
 
+/// The effective track over the geometric one for a skid steer whose calibration is not
+/// given: Clearpath's figure for the Husky (`husky_control/config/control.yaml`,
+/// `wheel_separation_multiplier: 1.875`).
+pub const SKID_STEER_SEPARATION_MULTIPLIER: f64 = 1.875;
+
 /// A differential drive whose geometry, mass and limits come from a URDF.
 #[derive(Debug, Clone)]
 pub struct DiffDrive {
@@ -85,7 +93,8 @@ pub struct DiffDrive {
     footprint: Footprint,
     max_speed: Bound,
     max_acceleration: Bound,
-    /// 1 / track, 1/m.
+    separation_multiplier: f64,
+    /// 1 / effective track, 1/m.
     inv_track: f32,
     /// The drive centre in the root frame, m.
     centre: [f32; 2],
@@ -93,14 +102,28 @@ pub struct DiffDrive {
 
 impl DiffDrive {
     /// The model of `description`, with `max_speed` (m/s) and `max_acceleration` (m/s²) bounding
-    /// each rim where the wheel joints' limits do not.
+    /// each rim where the wheel joints' limits do not, turning on `separation_multiplier` times
+    /// the geometric track (`None`: 1 for one wheel a side, [`SKID_STEER_SEPARATION_MULTIPLIER`]
+    /// for more).
     ///
     /// # Panics
-    /// If a fallback bound is not finite and positive.
-    pub fn new(description: &WheeledDescription, max_speed: f64, max_acceleration: f64) -> Self {
+    /// If a fallback bound or the multiplier is not finite and positive.
+    pub fn new(
+        description: &WheeledDescription,
+        max_speed: f64,
+        max_acceleration: f64,
+        separation_multiplier: Option<f64>,
+    ) -> Self {
+        let separation_multiplier =
+            separation_multiplier.unwrap_or(if is_skid_steer(description) {
+                SKID_STEER_SEPARATION_MULTIPLIER
+            } else {
+                1.0
+            });
         for (name, value) in [
             ("max_speed", max_speed),
             ("max_acceleration", max_acceleration),
+            ("separation_multiplier", separation_multiplier),
         ] {
             assert!(
                 value.is_finite() && value > 0.0,
@@ -111,7 +134,8 @@ impl DiffDrive {
             footprint: Footprint::covering(&description.outline),
             max_speed: Bound::from(description.max_rim_speed(), max_speed),
             max_acceleration: Bound::from(description.max_rim_acceleration(), max_acceleration),
-            inv_track: (1.0 / description.track) as f32,
+            separation_multiplier,
+            inv_track: (1.0 / (description.track * separation_multiplier)) as f32,
             centre: description.drive_centre.map(|c| c as f32),
             description: description.clone(),
         }
@@ -136,6 +160,26 @@ impl DiffDrive {
     pub fn max_acceleration(&self) -> Bound {
         self.max_acceleration
     }
+
+    /// The effective track over the geometric one.
+    pub fn separation_multiplier(&self) -> f64 {
+        self.separation_multiplier
+    }
+
+    /// The track the drive turns on, m: `ω = (v_r − v_l) / effective_track`.
+    pub fn effective_track(&self) -> f64 {
+        self.description.track * self.separation_multiplier
+    }
+}
+
+/// True for more than one wheel on a side: a skid steer.
+fn is_skid_steer(description: &WheeledDescription) -> bool {
+    let left = description
+        .wheels
+        .iter()
+        .filter(|w| w.centre.y > 0.0)
+        .count();
+    left > 1 || description.wheels.len() - left > 1
 }
 
 impl Dynamics for DiffDrive {
@@ -161,7 +205,7 @@ impl Dynamics for DiffDrive {
         // The drive centre moves at ṗ + ω × R·a; along the heading that adds −ω·a_y.
         let forward = cos * state.velocity.x + sin * state.velocity.y
             - omega * self.description.drive_centre[1];
-        let half_turn = 0.5 * omega * self.description.track;
+        let half_turn = 0.5 * omega * self.effective_track();
         let top = self.max_speed.value();
         let values = [
             0.0,

@@ -78,6 +78,8 @@ pub struct Settings {
     pub wheel_max_speed: f64,
     /// Each wheel rim's acceleration bound where the wheel joints give no `<limit effort>`, m/s².
     pub wheel_max_acceleration: f64,
+    /// The drive's effective track over its geometric one; `None`: the drive's own default.
+    pub wheel_separation_multiplier: Option<f64>,
     /// Treatment of space the scan does not describe.
     pub unknown_space: UnknownSpace,
     /// Floor height (odometry frame), metres.
@@ -159,6 +161,7 @@ impl Settings {
             max_acceleration: p.double("max_acceleration"),
             wheel_max_speed: p.required_double("wheel_max_speed"),
             wheel_max_acceleration: p.required_double("wheel_max_acceleration"),
+            wheel_separation_multiplier: p.double("wheel_separation_multiplier"),
             unknown_space: p.choice("unknown_space", UnknownSpace::from_name),
             floor_height,
             ceiling_height,
@@ -265,6 +268,8 @@ impl NodeSettings {
         } else {
             None
         };
+        let speed_limit_defaults =
+            SpeedLimitMapping::model_defaults(p.choice("model", ModelKind::from_name));
         Ok(Self {
             odom_topic: name("odom_topic"),
             scan_topic: name("scan_topic"),
@@ -277,8 +282,12 @@ impl NodeSettings {
             speed_limit_topic: name("speed_limit_topic"),
             speed_limit: p.flag("publish_speed_limit").then(|| SpeedLimitOutput {
                 mapping: SpeedLimitMapping {
-                    full_speed_at: p.required_double("speed_limit_full_speed_at"),
-                    span: p.required_double("speed_limit_span"),
+                    full_speed_at: p
+                        .double("speed_limit_full_speed_at")
+                        .unwrap_or(speed_limit_defaults.full_speed_at),
+                    span: p
+                        .double("speed_limit_span")
+                        .unwrap_or(speed_limit_defaults.span),
                     floor: p.required_double("speed_limit_floor"),
                     max_speed: p.double("speed_limit_max_speed"),
                 },
@@ -461,6 +470,21 @@ mod tests {
                 rate_hz: 10.0
             })
         );
+        // A wheeled robot scores on another scale (the Husky: −1.04 at top speed in the open):
+        // its threshold and span are its model's own unless set.
+        let wheeled = [
+            "publish_speed_limit:=true",
+            "model:=diff_drive",
+            "volume_dims:=2",
+        ]
+        .map(String::from);
+        let (_, node, _) = load_all(&[], DEFAULT_NODE_NAME, &wheeled).unwrap();
+        let mapping = node.speed_limit.unwrap().mapping;
+        assert_eq!((mapping.full_speed_at, mapping.span), (-1.05, 0.7));
+        let set = [&wheeled[..], &["speed_limit_full_speed_at:=-2".into()]].concat();
+        let (_, node, _) = load_all(&[], DEFAULT_NODE_NAME, &set).unwrap();
+        let mapping = node.speed_limit.unwrap().mapping;
+        assert_eq!((mapping.full_speed_at, mapping.span), (-2.0, 0.7));
         let error = load_all(&[], DEFAULT_NODE_NAME, &["speed_limit_floor:=0".into()])
             .unwrap_err()
             .to_string();

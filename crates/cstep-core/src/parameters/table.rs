@@ -310,6 +310,19 @@ pub const PARAMETERS: &[Parameter] = &[
         change: Change::ReadOnly,
     },
     Parameter {
+        name: "wheel_separation_multiplier",
+        rule: Rule::Positive { optional: true },
+        default: ".nan",
+        unit: None,
+        description: "diff_drive: the track the drive turns on, as a multiple of the wheels' \
+            geometric one (ros2_control's diff_drive_controller parameter of the same name): a \
+            skid steer's wheels scrub sideways in a turn, so it turns slower than its rims \
+            would without slip. .nan: 1.0 for one wheel a side; 1.875 for a skid steer (more \
+            than one wheel a side), the figure Clearpath calibrated for the Husky \
+            (husky_control/config/control.yaml). Set your robot's own calibration.",
+        change: Change::ReadOnly,
+    },
+    Parameter {
         name: "unknown_space",
         rule: Rule::Choice(&["occupied", "free"]),
         default: "occupied",
@@ -500,25 +513,27 @@ pub const PARAMETERS: &[Parameter] = &[
     },
     Parameter {
         name: "speed_limit_full_speed_at",
-        rule: Rule::Between {
-            min: f64::NEG_INFINITY,
-            max: f64::INFINITY,
-        },
-        default: "1.5",
+        rule: Rule::OptionalFinite,
+        default: ".nan",
         unit: Some("nats"),
-        description: "Empowerment at and above which the speed limit is 100 %. 1.5 nats: a \
-            free reachable area of e^1.5 = 4.5 m² within the horizon; the Crazyflie in the \
-            paper's arena scores 1.38 at 0.35 m from a wall and 1.86 in the open.",
+        description: "Empowerment at and above which the speed limit is 100 %. .nan: the \
+            model's own. quadrotor and point_mass: 1.5, a free reachable area of e^1.5 = \
+            4.5 m² within the horizon (the Crazyflie in the paper's arena scores 1.38 at \
+            0.35 m from a wall and 1.86 in the open). diff_drive: -1.05, where 95 % of the \
+            Husky's states at its top speed in the open score (experiments/husky/\
+            speed_limit_scores.md: -1.04).",
         change: Change::ReadOnly,
     },
     Parameter {
         name: "speed_limit_span",
-        rule: Rule::Positive { optional: false },
-        default: "1.5",
+        rule: Rule::Positive { optional: true },
+        default: ".nan",
         unit: Some("nats"),
         description: "Empowerment below speed_limit_full_speed_at over which the limit falls \
-            linearly to speed_limit_floor (1.5: the floor at 0 nats, a free reachable area of \
-            1 m²).",
+            linearly to speed_limit_floor. .nan: the model's own. quadrotor and point_mass: \
+            1.5, the floor at 0 nats, a free reachable area of 1 m². diff_drive: 0.7, the \
+            floor at -1.75, where the Husky scores at top speed within 0.6 m of an obstacle \
+            (median -1.72).",
         change: Change::ReadOnly,
     },
     Parameter {
@@ -873,9 +888,14 @@ mod tests {
                 "'speed_limit_floor' must be a number in 1.0 to 100.0, got 100.5",
             ),
             (
-                "speed_limit_full_speed_at",
+                "cloud_min_height",
                 ".nan",
-                "'speed_limit_full_speed_at' must be a finite number, got NaN",
+                "'cloud_min_height' must be a finite number, got NaN",
+            ),
+            (
+                "cloud_min_height",
+                "-.inf",
+                "'cloud_min_height' must be a finite number, got -inf",
             ),
             (
                 "speed_limit_full_speed_at",

@@ -18,7 +18,7 @@ use cstep::ros::messages::{
     ColorRGBA, CompressedImage, DiagnosticArray, Duration, EmpoweredReward, Empowerment,
     EvaluateBatchRequest, EvaluateBatchResponse, EvaluateRequest, EvaluateResponse, Header,
     LaserScan, Marker, MarkerArray, MeshFile, Odometry, Point, PointCloud2, Pose, PoseStamped,
-    Quaternion, Time, UVCoordinate, Vector3,
+    Quaternion, SpeedLimit, Time, UVCoordinate, Vector3,
 };
 use serde::de::DeserializeOwned;
 use serde::Serialize;
@@ -27,7 +27,7 @@ use serde::Serialize;
 const CDR_LE: [u8; 4] = [0x00, 0x01, 0x00, 0x00];
 
 /// Every fixture file; `every_fixture_file_is_tested` keeps this list complete.
-const FIXTURES: [&str; 15] = [
+const FIXTURES: [&str; 16] = [
     "diagnostic_array",
     "empowered_reward",
     "empowerment",
@@ -43,6 +43,7 @@ const FIXTURES: [&str; 15] = [
     "point_cloud2",
     "point_cloud2_big_endian",
     "pose_stamped",
+    "speed_limit",
 ];
 
 fn fixture_dir() -> &'static Path {
@@ -232,6 +233,21 @@ fn empowerment_round_trips() {
     assert_eq!((e.num_trajectories, e.num_colliding), (150, 27));
     assert!(e.valid);
     assert_eq!(e.status, "ok");
+}
+
+#[test]
+fn nav2_speed_limit_round_trips() {
+    // What Nav2's controller server receives: rclpy's bytes for the test-only nav2_msgs, the
+    // message definition Nav2 ships.
+    let limit: SpeedLimit = decode("speed_limit");
+    assert_eq!(
+        limit,
+        SpeedLimit {
+            header: header(5001, 250_000_000, "odom"),
+            percentage: true,
+            speed_limit: 79.375,
+        }
+    );
 }
 
 #[test]

@@ -8,14 +8,12 @@ SpeedLimit.msg (tests/interfaces/nav2_msgs) into the cargo target directory and 
 prefix as ``CSTEP_TEST_INTERFACES`` (its libraries on ``LD_LIBRARY_PATH``).
 """
 
-import os
 import signal
-import sys
 from itertools import pairwise
-from pathlib import Path
 
 import pytest
 from conftest import wait_until
+from nav2_msgs_loader import speed_limit_type
 from node_rig import (
     Rig,
     corridor_scan,
@@ -27,19 +25,7 @@ from node_rig import (
 )
 from rclpy.qos import QoSProfile, ReliabilityPolicy
 
-
-def _speed_limit_type():
-    """Nav2's SpeedLimit from the test-only nav2_msgs, or None where it was not built."""
-    prefix = os.environ.get("CSTEP_TEST_INTERFACES")
-    if not prefix:
-        return None
-    sys.path.insert(0, str(Path(prefix) / "lib" / "python3.11" / "site-packages"))
-    from nav2_msgs.msg import SpeedLimit
-
-    return SpeedLimit
-
-
-SpeedLimit = _speed_limit_type()
+SpeedLimit = speed_limit_type()
 
 
 @pytest.fixture(autouse=True)

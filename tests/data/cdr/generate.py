@@ -13,8 +13,9 @@ checks the values set here, re-encodes and expects the same bytes; ``tests/pytho
 test_cdr_fixtures.py`` regenerates them and expects the committed files, so the fixtures
 provably come from rclpy.
 
-Regenerate after changing a message (``make venv`` first):
-    .venv/bin/python tests/data/cdr/generate.py
+Regenerate after changing a message (``make test-python`` first, for the test-only nav2_msgs):
+    CSTEP_TEST_INTERFACES=target/test-interfaces/install \
+    LD_LIBRARY_PATH=target/test-interfaces/install/lib .venv/bin/python tests/data/cdr/generate.py
 """
 
 import importlib
@@ -43,6 +44,8 @@ from std_msgs.msg import ColorRGBA, Header
 from visualization_msgs.msg import Marker, MarkerArray, MeshFile, UVCoordinate
 
 HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE.parents[1] / "python"))
+from nav2_msgs_loader import speed_limit_type  # tests/python, just put on the path
 
 # The encapsulation header rclpy puts before the body: CDR (XCDR1), little-endian, no options.
 ENCAPSULATION_CDR_LE = b"\x00\x01\x00\x00"
@@ -373,6 +376,22 @@ def diagnostic_array() -> DiagnosticArray:
     )
 
 
+def speed_limit():
+    """Nav2's SpeedLimit as the node publishes it: a percentage, stamped with the scan, in the
+    odometry frame. Needs the test-only nav2_msgs (``make test-python`` builds it)."""
+    SpeedLimit = speed_limit_type()
+    if SpeedLimit is None:
+        raise RuntimeError(
+            "the speed_limit fixture needs the test-only nav2_msgs: run `make test-python`, or set "
+            "CSTEP_TEST_INTERFACES and LD_LIBRARY_PATH as it does"
+        )
+    return SpeedLimit(
+        header=Header(stamp=Time(sec=5001, nanosec=250_000_000), frame_id="odom"),
+        percentage=True,
+        speed_limit=79.375,
+    )
+
+
 FIXTURES = {
     "header": header,
     "odometry": odometry,
@@ -389,6 +408,7 @@ FIXTURES = {
     "marker_array": marker_array,
     "point_cloud2": point_cloud2,
     "point_cloud2_big_endian": point_cloud2_big_endian,
+    "speed_limit": speed_limit,
 }
 
 

@@ -1,7 +1,8 @@
 """cstep_bridge.envs.husky: the Clearpath Husky (pybullet_data's URDF as shipped, real PyBullet)
 in the demo's hall — its drive read from the URDF, collisions, a scripted drive through the
 door, check_env, the empowered reward in process and from a live `cstep node` over real rclpy
-(own domain), seeded resets, and the trainer on it."""
+(own domain), seeded resets, its evaluation and validation sets, and the trainer, its validation
+and `evaluate` on it."""
 
 import json
 import math
@@ -14,7 +15,8 @@ from conftest import REPO
 from cstep_bridge.envs import make_env
 from cstep_bridge.envs.husky import NODE_PARAMS, CStepHuskyEnv
 from cstep_bridge.errors import ConfigError
-from cstep_bridge.evaluation.flights import configurations
+from cstep_bridge.evaluation.eval_set import HUSKY, SIZE
+from cstep_bridge.evaluation.flights import configurations, reset_options
 from cstep_bridge.reward.collision import held_return
 from cstep_bridge.sim.husky import (
     HUSKY_HALL,
@@ -183,6 +185,9 @@ def test_a_proportional_controller_drives_through_the_door_to_the_goal():
         xy = np.array([i["position"] for i in infos])
         in_door = (xy[:, 0] > 3.0) & (xy[:, 0] < 4.0)
         assert in_door.any() and np.abs(xy[in_door, 1]).max() < 0.7 - env.robot_radius
+        through = env.sim.hall.through_door(xy)  # what evaluate reports: first past x = 3
+        assert through == np.flatnonzero(xy[:, 0] < 3.0)[0]
+        assert env.sim.hall.through_door(xy[:through]) is None  # not yet through
         assert min(i["min_obstacle_distance"] for i in infos) > env.robot_radius
         assert last["time"] < 15.0
     finally:
@@ -232,31 +237,75 @@ def test_seeded_resets_reproduce_the_task_and_the_episode():
         fresh.close()
 
 
-def test_the_trainer_runs_the_paper_protocol_on_the_husky_and_tuned_has_no_section(tmp_path):
-    """A tiny empowered run (the paper protocol's settings, 256 steps, scored in process). The
-    tuned protocol, the validation sets and the evaluation sets have nothing for the Husky:
-    each says so instead of flying another env's configurations."""
+def test_the_committed_evaluation_set_is_its_seeds_and_validation_draws_other_tasks(tmp_path):
+    """The Husky's 100 evaluation tasks are what ``Hall.random`` draws from the set's seed (as
+    ``python -m cstep_bridge.eval_set --env husky`` writes them), each through the door; the
+    validation tasks, drawn from another seed, share no start or goal with them."""
+    assert HUSKY.path.read_text() == HUSKY.to_json(HUSKY.generate())
+    assert json.loads(HUSKY.path.read_text())["seed"] == HUSKY.seed
+    committed = configurations("husky")
+    assert len(committed) == SIZE == 100
+    door_x0 = min(r[0] for r in PALLETS)
+    for task in committed:
+        assert Hall.clearance(task.start) >= HUSKY_HALL["draws"]["margin"] - 1e-6
+        assert (task.start[0] < door_x0) != (task.goal[0] < door_x0)
+    assert reset_options("husky", committed[0]) == {"hall": committed[0]}
+    validation = validation_set("husky", 200)
+
+    def points(tasks: list[Hall]) -> set[tuple[float, ...]]:
+        return {tuple(np.round(xy, 6)) for t in tasks for xy in (t.start, t.goal)}
+
+    assert len(points(validation)) == 400 and not points(committed) & points(validation)
+    assert points(validation_set("husky", 40)) <= points(validation)  # a prefix of a larger one
+    bad = tmp_path / "set.json"
+    bad.write_text('{"configurations": [{"start": [0, 0]}]}')
+    with pytest.raises(ConfigError, match="not a readable evaluation set for the husky"):
+        configurations("husky", bad)
+
+
+def test_the_trainer_validates_a_husky_run_that_evaluate_scores_and_tuned_has_none(tmp_path):
+    """A tiny empowered run (the paper protocol's settings, 256 steps, scored in process) with
+    validation switched on validates on the Husky's validation set; ``evaluate`` flies it over
+    three evaluation tasks and writes its tables, JSON and plots. The tuned protocol has no Husky
+    section and says to train with the paper's."""
     out = tmp_path / "husky"
     trained = run(
         "train", "--env", "husky", "--agent", "empowered", "--safety-coefficient", "0.5",
         "--timesteps", "256", "--n-steps", "128", "--batch-size", "64", "--n-epochs", "1",
-        "--net", "32,32", "--seed", "1", "--no-progress", "--out", str(out),
+        "--net", "32,32", "--seed", "1", "--no-progress", "--vec-env", "dummy",
+        "--hyperparams", "validation={every: 256, episodes: 2}", "--out", str(out),
     )  # fmt: skip
-    assert "saved" in trained.stdout
+    assert "validation at 256" in trained.stdout and "saved" in trained.stdout
     config = json.loads((out / "run.json").read_text())
     assert (config["env"], config["protocol"], config["reward_source"]) == (
         "husky",
         "paper",
         "inprocess",
     )
-    assert (out / "model.zip").is_file()
+    assert config["validation"] == {"every": 256, "episodes": 2}
+    rows = (out / "validation.csv").read_text().splitlines()
+    assert len(rows) == 2 and rows[1].startswith("256,") and (out / "best_model.zip").is_file()
+
+    results = tmp_path / "results"
+    run("evaluate", "--model", str(out), "--episodes", "3", "--out", str(results))
+    doc = json.loads((results / "results.json").read_text())
+    assert doc["env"] == "husky"
+    summary = doc["summaries"]["empowered c=0.5"]
+    assert summary["episodes"] == 3 and summary["cleared_rate"] is None  # no drone clear line
+    assert 0 <= summary["success_rate"] <= 1 and 0 <= summary["collision_rate"] <= 1
+    assert set(doc["intervals"]["empowered c=0.5"]) >= {"success", "collision", "through_door"}
+    episodes = doc["episodes"]["empowered c=0.5"]
+    assert [e["config"] for e in episodes] == [0, 1, 2]
+    assert all(isinstance(e["through_door"], bool) and "door_time" in e for e in episodes)
+    page = (results / "results.md").read_text()
+    assert "# Evaluation: husky, 3 configurations" in page and "## Through the door" in page
+    assert "Collision rate" in page and "Paper:" not in page
+    for png in ("paths.png", "time_near_obstacle.png", "training_curves.png", "seeds.png"):
+        assert (results / png).stat().st_size > 0
+
     tuned = parse_args(["--env", "husky", "--protocol", "tuned", "--out", str(tmp_path)])
-    with pytest.raises(ConfigError, match="no section for env 'husky'"):
+    with pytest.raises(ConfigError, match="no section for env 'husky'.*--protocol paper"):
         run_settings(tuned)
-    with pytest.raises(ConfigError, match="no validation set for env 'husky'"):
-        validation_set("husky", 4)
-    with pytest.raises(ConfigError, match="no evaluation set for env 'husky'"):
-        configurations("husky")
 
 
 def test_the_nodes_reward_is_the_in_process_one(ros_domain):

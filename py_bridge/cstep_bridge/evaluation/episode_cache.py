@@ -6,7 +6,8 @@ digest of everything an episode depends on: the model's weights, the observation
 is normalised with, the environment, the evaluation set's contents, the acting rule, the source
 of every module of this package that the evaluation loads (simulation, envs, controller, metrics
 — not, say, the bag recorder), its data files, the drone's URDF and the versions of the
-libraries that fly and act (PyBullet, PyTorch, stable-baselines3, NumPy, SciPy); any change to
+libraries that fly and act (PyBullet, whose pybullet_data ships the Husky's URDF, PyTorch,
+stable-baselines3, NumPy, SciPy); any change to
 one of them makes a new key, so a stale entry is never read. Entries are pickles: the cache is a
 directory of the user's own files, not a format to exchange.
 """
@@ -30,8 +31,10 @@ FLYING_MODULES = (
     "envs",
     "envs.drone",
     "envs.maze",
+    "envs.husky",
     "sim.drone",
     "sim.maze",
+    "sim.husky",
     "sim.world",
     "training.normalization",
     "evaluation.metrics",

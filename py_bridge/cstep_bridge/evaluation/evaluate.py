@@ -6,7 +6,8 @@
 Models with the same label (``--label``, or by default the agent and its c from run.json, e.g.
 ``unempowered``, ``empowered c=0.5``) are one agent trained with several seeds. Every model flies
 every configuration of the environment's fixed evaluation set (the drone: the 100 arenas of
-``data/drone_eval_set.json``; the maze: its 18 start × goal combinations) with its policy, acting
+``data/drone_eval_set.json``; the Husky: the 100 hall tasks of ``data/husky_eval_set.json``; the
+maze: its 18 start × goal combinations) with its policy, acting
 by its mode, its expected action or sampling as in training (``--action``,
 :mod:`cstep_bridge.evaluation.acting`).
 Evaluation needs no reward, so no ``cstep node`` runs. ``--cache DIR`` keeps each
@@ -17,10 +18,14 @@ Writes to ``--out``:
   within 0.1 … 0.5 m of an obstacle; its decrease relative to the first agent (the baseline); for
   the maze also which route each agent took. Each mean over seeds and configurations comes with
   its 95 % bootstrap interval, and each agent's p-values against the baseline (paired tests on the
-  same configurations) are tabled; for the drone, the paper's own numbers beside ours.
+  same configurations) are tabled; for the drone, the paper's own numbers beside ours. The drone's
+  clear line (the block's far face) is one x for every arena; the maze has no obstacle to clear,
+  and the Husky's tasks cross the door either way, so for those two the table has success and
+  collisions only, and the Husky's has a table of its own of how many came through the door
+  between the pallets and when (``through_door``, ``door_time``).
 - ``results.json``: every summary, interval and test, and every episode's outcome.
-- ``paths.png``: the flown paths over the map (the drone: the first six configurations; of each
-  agent's first seed).
+- ``paths.png``: the flown paths over the map (the drone and the Husky: the first six
+  configurations; the maze: every configuration, one map per agent; of each agent's first seed).
 - ``time_near_obstacle.png``: mean time within a distance of an obstacle against the distance,
   with its 95 % interval as a band.
 - ``training_curves.png``: training and validation success over training steps, mean and range
@@ -47,6 +52,8 @@ from ..cli import log_to_stdout
 from ..envs import ENV_NAMES
 from ..errors import RayUnavailable
 from ..sim.drone import Arena
+from ..sim.husky import BOUNDS as HALL_BOUNDS
+from ..sim.husky import PALLETS
 from ..sim.maze_layout import LAYOUT
 from ..training import training_log
 from ..training.config import RunConfig
@@ -59,7 +66,14 @@ from .paper_results import PaperAgent
 from .plots import MapPanel, Path2D, paths_figure, seed_figure, threshold_figure, training_curves
 
 FINE_THRESHOLDS = tuple(np.round(np.arange(0.05, 0.501, 0.025), 3))
-DRONE_PANELS = 6
+CONFIG_PANELS = 6
+"""Configurations ``paths.png`` draws for the drone and the Husky (each agent's paths on each)."""
+DOOR_METRICS = {
+    "through_door": lambda e: float(e.extra["through_door"] and not e.collision),
+    "door_time": lambda e: e.extra["door_time"],
+}
+"""The Husky's passage through the door, per episode: came through and never collided (a rate),
+and when it came through (s; over the episodes that did, collided or not)."""
 
 
 @dataclass
@@ -226,6 +240,25 @@ def markdown(
                 f"| {label} | {_ci(ci['success'], '%')} | {_ci(ci['clear_time'])} | "
                 f"{_ci(ci['collision'], '%')} | {_ci(ci['cleared'], '%')} | {theirs} |"
             )
+    if env == "husky":
+        lines += [
+            "",
+            "## Through the door",
+            "",
+            (
+                "Every task starts on one side of the pallets and has its goal on the other. "
+                "Through the door: the robot's origin got past the pallets on the goal's side "
+                "(the only way there is the door) and it never collided. Time: when it first "
+                "did, over the episodes that got there."
+            ),
+            "",
+            "| Agent | Through the door | Avg. time through the door (s) |",
+            "|---|---:|---:|",
+        ]
+        lines += [
+            f"| {label} | {_ci(ci['through_door'], '%')} | {_ci(ci['door_time'])} |"
+            for label, ci in intervals.items()
+        ]
     if env == "maze":
         lines += [
             "",
@@ -375,15 +408,17 @@ def panels(
     results: dict[str, list[metrics.Episode]],
     eval_set: Path | None = None,
 ) -> list[MapPanel]:
-    """The maps to draw paths on: six drone configurations, or the maze once per agent."""
+    """The maps to draw paths on: six drone or Husky configurations, or the maze once per
+    agent."""
     configs = configurations(env, eval_set)
-    if env == "drone":
-        shown = sorted({e.config for e in next(iter(results.values()))})[:DRONE_PANELS]
+    if env in ("drone", "husky"):
+        shown = sorted({e.config for e in next(iter(results.values()))})[:CONFIG_PANELS]
         out = []
         for i in shown:
-            a = configs[i]
+            c = configs[i]
+            bounds, obstacles = (c.bounds, [c.block]) if env == "drone" else (HALL_BOUNDS, PALLETS)
             panel = MapPanel(
-                f"configuration {i}", a.bounds, [a.block], starts=[a.start], goals=[a.goal]
+                f"configuration {i}", bounds, obstacles, starts=[c.start], goals=[c.goal]
             )
             for agent in agents:
                 e = next(e for e in results[agent.label] if e.config == i)
@@ -425,8 +460,8 @@ def parse_args(argv: list[str] | None = None) -> argparse.Namespace:
     ap.add_argument(
         "--eval-set",
         type=Path,
-        help="drone: a JSON evaluation set in the format of data/drone_eval_set.json "
-        "(default: that file, the committed 100 arenas)",
+        help="drone, husky: a JSON evaluation set in the format of data/<env>_eval_set.json "
+        "(default: that file, the committed 100 configurations)",
     )
     ap.add_argument("--episodes", type=int, help="only the first N configurations")
     ap.add_argument(
@@ -529,6 +564,11 @@ def main(argv: list[str] | None = None) -> int:
                 )
             summaries[label] = metrics.summarize([e for run in runs[label] for e in run], line)
             intervals[label] = comparison.intervals(runs[label], line)
+            if env == "husky":
+                intervals[label] |= {
+                    name: comparison.bootstrap_ci(comparison.metric_matrix(runs[label], value))
+                    for name, value in DOOR_METRICS.items()
+                }
     base_label, base_runs = next(iter(runs.items()))
     for label, seeds in list(runs.items())[1:]:
         tests[label] = comparison.versus_baseline(base_runs, seeds, line)

@@ -28,7 +28,7 @@ from ..training.normalization import observation_normalizer
 from . import metrics
 from .acting import DEFAULT_ACTING_RULE, actor
 from .episode_cache import EpisodeCache, entry_key
-from .eval_set import DEFAULT_PATH, load
+from .eval_set import EVAL_SETS
 
 logger = logging.getLogger(__name__)
 """Where this module's messages go (on stdout under the command-line tools)."""
@@ -37,21 +37,47 @@ CHUNK = 10
 """Episodes a worker flies per task: the grain at which a cached evaluation resumes."""
 
 
+RESET_OPTION = {"drone": "arena", "maze": "config", "husky": "hall"}
+"""The ``reset`` option of each environment that pins one configuration."""
+
+
 def configurations(env: str, eval_set: Path | None = None) -> list[Any]:
-    """The environment's evaluation set, in order: the drone's committed 100 arenas (or those of
-    ``eval_set``, a JSON file in the same format), the maze's 18 start × goal combinations."""
-    if env == "drone":
-        return load(eval_set or DEFAULT_PATH)
+    """The environment's evaluation set, in order: the drone's committed 100 arenas and the
+    Husky's 100 hall tasks (:mod:`~cstep_bridge.evaluation.eval_set`; or those of ``eval_set``,
+    a JSON file in the same format), the maze's 18 start × goal combinations."""
+    if env in EVAL_SETS:
+        return EVAL_SETS[env].load(eval_set)
     if env != "maze":
-        raise ConfigError(f"no evaluation set for env {env!r}: the drone and the maze have one")
+        raise ConfigError(
+            f"no evaluation set for env {env!r}: the drone, the maze and the Husky have one"
+        )
     if eval_set is not None:
-        raise ConfigError("--eval-set: only the drone takes an evaluation set from a file")
+        raise ConfigError(
+            "--eval-set: the maze's set is its 18 start × goal combinations, not a file "
+            "(only the drone and the Husky take one)"
+        )
     return maze_configurations()
 
 
 def reset_options(env: str, config: Any) -> dict[str, Any]:
     """The ``reset`` options that pin one configuration."""
-    return {"arena": config} if env == "drone" else {"config": config}
+    return {RESET_OPTION[env]: config}
+
+
+def episode_extras(env: str, config: Any, xy: np.ndarray, dt: float) -> dict[str, Any]:
+    """What an environment's episodes record beyond the common outcome (``Episode.extra``): the
+    maze's route (narrow, wide or neither); the Husky's passage through the door between the
+    pallets (``through_door``) and when it came through (``door_time``, s; None if it never
+    did). The drone's clear line is the same for every arena, so it needs nothing here."""
+    if env == "maze":
+        return {"route": route_taken(xy)}
+    if env == "husky":
+        step = config.through_door(xy)
+        return {
+            "through_door": step is not None,
+            "door_time": None if step is None else dt * (step + 1),
+        }
+    return {}
 
 
 def fly_episodes(
@@ -69,7 +95,6 @@ def fly_episodes(
     act = actor(model, acting)
     radius = env.unwrapped.robot_radius
     dt = env.unwrapped.control_period
-    route = route_taken if env_name == "maze" else None
     episodes = []
     for i, config in zip(ids, configs, strict=True):
         obs, info = env.reset(seed=i, options=reset_options(env_name, config))
@@ -89,8 +114,7 @@ def fly_episodes(
             collision=bool(info["collision"]),
             config=i,
         )
-        if route is not None:
-            episode.extra["route"] = route(episode.xy)
+        episode.extra.update(episode_extras(env_name, config, episode.xy, dt))
         episodes.append(episode)
     return episodes
 

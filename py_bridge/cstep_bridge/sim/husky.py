@@ -230,6 +230,16 @@ class Hall:
         start, goal = (_uniform_in(rng, sides[k]) for k in (first, 1 - first))
         return cls(start=start, yaw=float(rng.uniform(-math.pi, math.pi)), goal=goal)
 
+    def through_door(self, xy: np.ndarray) -> int | None:
+        """The index of the first of the positions ``xy`` (n × 2, the robot's origin) beyond the
+        pallets on the goal's side (past the stacks' face there): where the robot came through
+        the door, the only way past them; None if it never did. A drawn task starts on the
+        other side, so this is the passage its task needs."""
+        near, far = min(r[0] for r in PALLETS), max(r[2] for r in PALLETS)
+        x = np.asarray(xy, dtype=float).reshape(-1, 2)[:, 0]
+        first = np.flatnonzero(x > far if self.goal[0] > (near + far) / 2 else x < near)
+        return int(first[0]) if first.size else None
+
     @staticmethod
     def clearance(xy: np.ndarray) -> float:
         """Distance (m) from a point to the nearest wall or pallet face (negative inside)."""

@@ -100,14 +100,24 @@ def load(name: str, env: str) -> dict[str, Any]:
     path = HYPERPARAMS / f"{name}.yml"
     if not path.exists():
         raise ConfigError(f"no protocol {name!r} (expected {path}); choose one of {PROTOCOLS}")
-    doc = yaml.safe_load(path.read_text()) or {}
+    doc = _sections(name)
     if env not in doc:
-        raise ConfigError(f"{path}: no section for env {env!r}")
+        others = [p for p in PROTOCOLS if p != name and env in _sections(p)]
+        message = f"{path}: no section for env {env!r} (protocol {name!r} has no settings for it)"
+        if others:
+            message += "; train it with " + " or ".join(f"--protocol {p}" for p in others)
+        raise ConfigError(message)
     section = dict(doc[env])
     unknown = set(section) - set(_DEFAULTS)
     if unknown:
         raise ConfigError(f"{path} [{env}]: unknown keys {sorted(unknown)}")
     return {**_DEFAULTS, **section}
+
+
+def _sections(name: str) -> dict[str, Any]:
+    """Protocol ``name``'s sections by environment (none when it has no file)."""
+    path = HYPERPARAMS / f"{name}.yml"
+    return (yaml.safe_load(path.read_text()) or {}) if path.exists() else {}
 
 
 def settings(hyper: dict[str, Any]) -> dict[str, Any]:

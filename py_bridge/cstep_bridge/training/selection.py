@@ -8,10 +8,12 @@ unempowered env (flying needs no reward, so no node); the model with the
 highest validation success rate so far (ties: fewer collisions, then the earlier) is saved as
 ``best_model.zip``. Each validation is appended to ``validation.csv`` and logged to TensorBoard.
 
-Validation sets: the drone flies arenas drawn with :data:`DRONE_SEED` (the evaluation set uses
-:data:`cstep_bridge.evaluation.eval_set.SEED`); the maze's evaluation set is its 18 cell-centre
-configurations, so its validation starts and goals are drawn uniformly within ±0.3 m of the
-centres of those cells instead.
+Validation sets: the drone flies arenas drawn with :data:`DRONE_SEED`, the Husky hall tasks drawn
+with :data:`HUSKY_SEED`, by the samplers of their evaluation sets
+(:mod:`~cstep_bridge.evaluation.eval_set`) from other seeds than those: the draws are continuous,
+so a validation configuration equals an evaluation one with probability zero, and a test checks
+that none does. The maze's evaluation set is its 18 cell-centre configurations, so its validation
+starts and goals are drawn uniformly within ±0.3 m of the centres of those cells instead.
 
 Configured by a protocol's ``validation`` entry: ``{every: 50000, episodes: 40, action: mode}``.
 
@@ -51,7 +53,7 @@ from ..cli import log_to_stdout
 from ..envs import make_env
 from ..errors import ConfigError
 from ..evaluation.acting import ACTING_RULES, DEFAULT_ACTING_RULE, check_rule
-from ..evaluation.eval_set import generate
+from ..evaluation.eval_set import EVAL_SETS
 from ..evaluation.flights import fly_episodes, fly_saved
 from ..sim.maze_layout import LAYOUT, MazeConfig
 from .config import RunConfig
@@ -65,6 +67,10 @@ DRONE_SEED = 7_331
 """Seed of the drone's validation arenas (not the evaluation set's)."""
 MAZE_SEED = 7_332
 """Seed of the maze's perturbed validation configurations."""
+HUSKY_SEED = 7_333
+"""Seed of the Husky's validation tasks (not the evaluation set's)."""
+DRAWN_SEEDS = {"drone": DRONE_SEED, "husky": HUSKY_SEED}
+"""The seeds of the validation sets drawn as the evaluation sets are."""
 MAZE_JITTER = 0.3
 """Half-width (m) of the square around a cell centre in which maze validation points lie."""
 
@@ -119,11 +125,12 @@ class Validation:
 def validation_set(env: str, size: int) -> list[Any]:
     """``size`` validation configurations of ``env`` (reset options' values), disjoint from the
     evaluation set."""
-    if env == "drone":
-        return generate(size, seed=DRONE_SEED)
+    if env in DRAWN_SEEDS:
+        return EVAL_SETS[env].generate(size, seed=DRAWN_SEEDS[env])
     if env != "maze":
         raise ConfigError(
-            f"validation: no validation set for env {env!r}: the drone and the maze have one"
+            f"validation: no validation set for env {env!r}: "
+            "the drone, the maze and the Husky have one"
         )
 
     rng = np.random.default_rng(MAZE_SEED)

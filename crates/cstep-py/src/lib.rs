@@ -15,7 +15,7 @@ use std::path::{Path, PathBuf};
 use cstep_core::estimator::Estimator;
 use cstep_core::input::{self, ScanGeometry};
 use cstep_core::model::diff_drive::DiffDrive;
-use cstep_core::model::urdf::RobotDescription;
+use cstep_core::model::urdf::{RobotDescription, UrdfError};
 use cstep_core::model::wheeled::WheeledDescription;
 use cstep_core::occupancy::ScanFrame;
 use cstep_core::parameters::{self, is_urdf_text, ParameterSet, DEFAULT_NODE_NAME};
@@ -343,6 +343,21 @@ fn yaml_value(name: &str, value: &Bound<'_, PyAny>) -> PyResult<Value> {
     }
 }
 
+/// A description read by the core from `urdf`, the XML text or a path (as the
+/// `robot_description` parameter takes it); the core's refusal as a `ValueError`.
+fn read_urdf<T>(
+    urdf: &str,
+    from_str: impl FnOnce(&str, &str) -> Result<T, UrdfError>,
+    load: impl FnOnce(&Path) -> Result<T, UrdfError>,
+) -> PyResult<T> {
+    if is_urdf_text(urdf) {
+        from_str(urdf, "robot_description (URDF text)")
+    } else {
+        load(Path::new(urdf))
+    }
+    .map_err(|e| PyValueError::new_err(e.to_string()))
+}
+
 /// ``robot_description(urdf)``: the multirotor as the core reads it from a URDF (a path or the
 /// XML text, as the ``robot_description`` parameter takes it), so the Python simulation can
 /// check that it flies the robot the scorer models. A dict: ``name``, ``mass`` (kg, all links),
@@ -351,12 +366,7 @@ fn yaml_value(name: &str, value: &Bound<'_, PyAny>) -> PyResult<Value> {
 /// raises ``ValueError`` with the core's message.
 #[pyfunction]
 fn robot_description<'py>(py: Python<'py>, urdf: &str) -> PyResult<Bound<'py, PyDict>> {
-    let description = if is_urdf_text(urdf) {
-        RobotDescription::from_str(urdf, "robot_description (URDF text)")
-    } else {
-        RobotDescription::load(Path::new(urdf))
-    }
-    .map_err(|e| PyValueError::new_err(e.to_string()))?;
+    let description = read_urdf(urdf, RobotDescription::from_str, RobotDescription::load)?;
     let dict = PyDict::new(py);
     dict.set_item("name", &description.name)?;
     dict.set_item("mass", description.mass)?;
@@ -380,12 +390,7 @@ fn robot_description<'py>(py: Python<'py>, urdf: &str) -> PyResult<Bound<'py, Py
 /// wheels' extent). A URDF the core refuses raises ``ValueError`` with the core's message.
 #[pyfunction]
 fn wheeled_description<'py>(py: Python<'py>, urdf: &str) -> PyResult<Bound<'py, PyDict>> {
-    let description = if is_urdf_text(urdf) {
-        WheeledDescription::from_str(urdf, "robot_description (URDF text)")
-    } else {
-        WheeledDescription::load(Path::new(urdf))
-    }
-    .map_err(|e| PyValueError::new_err(e.to_string()))?;
+    let description = read_urdf(urdf, WheeledDescription::from_str, WheeledDescription::load)?;
     // Any bounds do: only the drive's default multiplier is read.
     let drive = DiffDrive::new(&description, 1.0, 1.0, None);
     let side = |left: bool| -> Vec<&str> {

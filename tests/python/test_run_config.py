@@ -12,7 +12,7 @@ from cstep_bridge.training import protocol
 from cstep_bridge.training.config import RunConfig
 from cstep_bridge.training.trainer import parse_args, run_settings
 
-COMMITTED = sorted((REPO / "docs" / "results").rglob("run.json"))
+COMMITTED = sorted((REPO / "experiments").rglob("run.json"))
 
 
 def test_a_protocols_settings_are_fields_of_the_run_configuration():

@@ -287,7 +287,8 @@ def test_the_trainer_validates_a_husky_run_that_evaluate_scores_and_tuned_has_no
     assert len(rows) == 2 and rows[1].startswith("256,") and (out / "best_model.zip").is_file()
 
     results = tmp_path / "results"
-    run("evaluate", "--model", str(out), "--episodes", "3", "--out", str(results))
+    flown = run("evaluate", "--model", str(out), "--episodes", "3", "--out", str(results))
+    assert "through the door" in flown.stdout and "cleared" not in flown.stdout, flown.stdout
     doc = json.loads((results / "results.json").read_text())
     assert doc["env"] == "husky"
     summary = doc["summaries"]["empowered c=0.5"]

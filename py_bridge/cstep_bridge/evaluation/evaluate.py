@@ -556,10 +556,16 @@ def main(argv: list[str] | None = None) -> int:
                     )
                 )
                 s = metrics.summarize(runs[label][-1], line)
+                if env == "husky":
+                    door = [DOOR_METRICS["through_door"](e) for e in runs[label][-1]]
+                    obstacle = f"through the door {np.mean(door):.0%}"
+                else:
+                    obstacle = (
+                        f"cleared {_fmt(s.cleared_rate, '.0%')}, "
+                        f"clear time {_fmt(s.clear_time, '.2f', ' s')}"
+                    )
                 print(
-                    f"  success {s.success_rate:.0%}, collisions {s.collision_rate:.0%}, "
-                    f"cleared {_fmt(s.cleared_rate, '.0%')}, "
-                    f"clear time {_fmt(s.clear_time, '.2f', ' s')}",
+                    f"  success {s.success_rate:.0%}, collisions {s.collision_rate:.0%}, {obstacle}",
                     flush=True,
                 )
             summaries[label] = metrics.summarize([e for run in runs[label] for e in run], line)

@@ -46,11 +46,12 @@ def corners(arena, side: str, clearance: float, radius: float):
     return [np.array([x0 - offset, y]), np.array([x1 + offset, y])]
 
 
-def fly(env: CStepDroneEnv, arena, waypoints):
-    """One episode: per-step task reward and empowerment, the surface gaps, whether it collided
-    and the step it first came within the success radius (None if never)."""
+def fly(env: CStepDroneEnv, arena, waypoints, hold=None):
+    """One episode through ``waypoints`` to ``hold`` (x, y; None: the goal), held there to the
+    end: per-step task reward and empowerment, the surface gaps, whether it collided and the
+    step it first came within the success radius (None if never)."""
     env.reset(options={"arena": arena})
-    targets = [*waypoints, arena.goal[:2]]
+    targets = [*waypoints, arena.goal[:2] if hold is None else hold]
     task, empowerment, gap, reached = [], [], [], None
     collided = False
     for step in range(10**6):

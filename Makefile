@@ -214,6 +214,11 @@ bench-steps: $(MSGS_STAMP)
 	$(CARGO) build --release --quiet
 	$(VENV_ENV) CSTEP_BIN=$(abspath $(TARGET_DIR))/release/cstep $(VPY) benches/python/bench_steps.py
 
+# One Scorer.score_batch call on 1, 2 and 16 drone states (the in-process reward's cost per
+# vector step); RAYON_NUM_THREADS=1 for one core's.
+bench-scorer: $(MSGS_STAMP) $(SCORING_STAMP)
+	$(VENV_ENV) $(VPY) benches/python/bench_scorer.py
+
 # PPO training steps per second over the whole loop, unempowered vs empowered (tuned protocol,
 # two envs, alternating rounds); BENCH_TRAIN_ARGS adds options (--rounds, --steps, --env, ...).
 bench-train: $(MSGS_STAMP)

@@ -1,7 +1,8 @@
 //! The paper's qualitative claims on the wheeled model (the Husky from its URDF, turning on the
 //! skid steer's effective track): walls lower the score, and driving at a wall scores below
 //! driving away from it (measured: a 1.6 m corridor −0.60 and a 1.2 m one −1.60 against −0.38
-//! in open space; at 1 m/s with a wall 1.2 m ahead −1.45 against −1.04 driving away).
+//! in open space; at 1 m/s with a wall 1.2 m ahead −1.45 against −1.04 driving away;
+//! `cargo test --release --test diff_drive_claims -- --nocapture` prints them).
 
 mod common;
 
@@ -42,6 +43,11 @@ fn open_space_scores_above_a_wide_corridor_above_a_narrow_one() {
     let wide = score(&e, &Scene::corridor(1.6, 20.0), 0.0, still);
     let narrow = score(&e, &Scene::corridor(1.2, 20.0), 0.0, still);
     assert!(open.valid() && wide.valid() && narrow.valid());
+    // The figures docs/how-it-works.md quotes (`-- --nocapture` prints them).
+    println!(
+        "open {:.2}, 1.6 m corridor {:.2}, 1.2 m corridor {:.2} nats",
+        open.empowerment, wide.empowerment, narrow.empowerment
+    );
     assert!(
         open.empowerment > wide.empowerment + 0.1 && wide.empowerment > narrow.empowerment + 0.1,
         "open {:.3}, wide {:.3}, narrow {:.3}",
@@ -67,6 +73,10 @@ fn driving_at_a_wall_scores_below_driving_away_from_it() {
             Vector3::new(-speed, 0.0, 0.0),
         );
         assert!(toward.valid() && away.valid());
+        println!(
+            "{speed} m/s: toward the wall {:.2}, away {:.2} nats",
+            toward.empowerment, away.empowerment
+        );
         assert!(
             toward.empowerment < away.empowerment - 0.2
                 && toward.num_colliding > away.num_colliding,

@@ -13,7 +13,7 @@ import json
 from pathlib import Path
 
 import numpy as np
-from cstep_bridge.evaluation.eval_set import DEFAULT_PATH
+from cstep_bridge.evaluation.eval_set import load
 
 
 def main() -> None:
@@ -22,7 +22,7 @@ def main() -> None:
     ap.add_argument("results", type=Path, help="an evaluation's results.json")
     results = ap.parse_args().results
     doc = json.loads(results.read_text())
-    goals = [c["goal"][:2] for c in json.loads(DEFAULT_PATH.read_text())["configurations"]]
+    goals = [arena.goal[:2] for arena in load()]
     with results.with_name("episode_metrics.csv").open() as f:
         cleared = {(r["model"], int(r["config"])) for r in csv.DictReader(f) if r["cleared"] == "1"}
     print(

@@ -167,6 +167,21 @@ def test_the_probability_of_improvement_counts_seed_pairs_as_mann_whitney_does()
     assert apart == comparison.Interval(1.0, 1.0, 1.0)
 
 
+def test_the_difference_of_two_agents_means_covers_the_true_difference():
+    rng = np.random.default_rng(5)
+    covered = 0
+    for _ in range(60):
+        base, agent = rng.normal(70.0, 10.0, 10), rng.normal(60.0, 10.0, 10)
+        iv = comparison.difference_interval(base, agent, resamples=2000)
+        assert iv.mean == pytest.approx(base.mean() - agent.mean())
+        assert iv.low <= iv.mean <= iv.high
+        covered += iv.low <= 10.0 <= iv.high
+    assert covered >= 48  # nominal 95 %, as the one-agent intervals
+    assert comparison.difference_interval([3.0, 3.0], [1.0]) == comparison.Interval(2.0, 2.0, 2.0)
+    with pytest.raises(ValueError, match="finite per-seed"):
+        comparison.difference_interval([1.0, np.inf], [1.0])
+
+
 def test_over_seeds_reads_each_agent_per_seed_and_counts_fewer_collisions_as_better():
     def seed_run(successes: int, collisions: int) -> list[metrics.Episode]:
         outcomes = [True] * successes + [False] * (10 - successes)

@@ -65,7 +65,8 @@ def test_the_simulated_husky_turns_as_the_cores_skid_steer_model_says():
     """Rims at top speed in opposite directions: PyBullet's Husky spins at the rate the core's
     diff_drive model gives it on the effective track (Clearpath's calibration), within 10 %, on
     every heading; driving straight it keeps the commanded speed and heading. With the wheels'
-    full sideways friction it spun at 1.0 rad/s of the model's 1.87."""
+    full sideways friction it spun at 1.22–1.40 rad/s of the model's 1.87
+    (``experiments/husky/spin_calibration.py``)."""
     model_rate = (
         2 * MAX_SPEED / cstep_scoring.wheeled_description(str(HUSKY_URDF))["effective_track"]
     )

@@ -14,7 +14,7 @@ use std::path::{Path, PathBuf};
 
 use cstep_core::estimator::Estimator;
 use cstep_core::input::{self, ScanGeometry};
-use cstep_core::model::diff_drive::DiffDrive;
+use cstep_core::model::diff_drive::default_separation_multiplier;
 use cstep_core::model::urdf::{RobotDescription, UrdfError};
 use cstep_core::model::wheeled::WheeledDescription;
 use cstep_core::occupancy::ScanFrame;
@@ -386,26 +386,20 @@ fn robot_description<'py>(py: Python<'py>, urdf: &str) -> PyResult<Bound<'py, Py
 /// robot the scorer models. A dict: ``name``, ``wheel_radius`` (m, the mean), ``track`` (m, the
 /// geometric one), ``separation_multiplier`` (the model's default for this drive) and
 /// ``effective_track`` (m, their product), ``left_joints`` and ``right_joints`` (the wheel joints
-/// by side, in file order), ``mass`` (kg), ``outline_y`` and ``outline_z`` (m, the chassis's and
+/// by side, in joint-name order), ``mass`` (kg), ``outline_y`` and ``outline_z`` (m, the chassis's and
 /// wheels' extent). A URDF the core refuses raises ``ValueError`` with the core's message.
 #[pyfunction]
 fn wheeled_description<'py>(py: Python<'py>, urdf: &str) -> PyResult<Bound<'py, PyDict>> {
     let description = read_urdf(urdf, WheeledDescription::from_str, WheeledDescription::load)?;
-    // Any bounds do: only the drive's default multiplier is read.
-    let drive = DiffDrive::new(&description, 1.0, 1.0, None);
-    let side = |left: bool| -> Vec<&str> {
-        let wheels = description.wheels.iter();
-        wheels
-            .filter(|w| (w.centre.y > 0.0) == left)
-            .map(|w| w.joint.as_str())
-            .collect()
-    };
+    let multiplier = default_separation_multiplier(&description);
+    let side =
+        |left: bool| -> Vec<&str> { description.side(left).map(|w| w.joint.as_str()).collect() };
     let dict = PyDict::new(py);
     dict.set_item("name", &description.name)?;
     dict.set_item("wheel_radius", description.wheel_radius)?;
     dict.set_item("track", description.track)?;
-    dict.set_item("separation_multiplier", drive.separation_multiplier())?;
-    dict.set_item("effective_track", drive.effective_track())?;
+    dict.set_item("separation_multiplier", multiplier)?;
+    dict.set_item("effective_track", description.track * multiplier)?;
     dict.set_item("left_joints", side(true))?;
     dict.set_item("right_joints", side(false))?;
     dict.set_item("mass", description.mass)?;
@@ -415,9 +409,8 @@ fn wheeled_description<'py>(py: Python<'py>, urdf: &str) -> PyResult<Bound<'py, 
 }
 
 /// The `cstep_scoring` module: [`Scorer`]; [`robot_description`]; [`wheeled_description`]; and
-/// `PAPER_WORLD_JSON`, the
-/// paper's world as the core compiled it in (`config/paper_world.json`), for the Python side to
-/// check its own copy against.
+/// `PAPER_WORLD_JSON`, the paper's world as the core compiled it in (`config/paper_world.json`),
+/// for the Python side to check its own copy against.
 #[pymodule]
 fn cstep_scoring(module: &Bound<'_, PyModule>) -> PyResult<()> {
     module.add(

@@ -295,6 +295,28 @@ def probability_of_improvement(
     return _percentile_bootstrap((a, b), _improvement, degenerate, confidence, resamples, seed)
 
 
+def _mean_difference(a: np.ndarray, b: np.ndarray, axis: int = -1) -> np.ndarray:
+    return np.mean(a, axis=axis) - np.mean(b, axis=axis)
+
+
+def difference_interval(
+    baseline: Sequence[float],
+    agent: Sequence[float],
+    confidence: float = CONFIDENCE,
+    resamples: int = RESAMPLES,
+    seed: int = RNG_SEED,
+) -> Interval:
+    """mean(``baseline``) − mean(``agent``) of per-seed scores, with a percentile bootstrap
+    interval that resamples each agent's seeds apart (the agents' seeds are not paired)."""
+    a, b = np.asarray(baseline, dtype=float), np.asarray(agent, dtype=float)
+    if not (np.all(np.isfinite(a)) and np.all(np.isfinite(b))) or a.size == 0 or b.size == 0:
+        raise ValueError(f"scores must be finite per-seed values, not {baseline!r}, {agent!r}")
+    degenerate = (a.size < 2 or np.all(a == a[0])) and (b.size < 2 or np.all(b == b[0]))
+    return _percentile_bootstrap(
+        (a, b), _mean_difference, bool(degenerate), confidence, resamples, seed
+    )
+
+
 SEED_SCORES = ("success", "collision", "success_minus_collision")
 """The per-seed scores (percent of the configurations) :func:`over_seeds` reads: success,
 collisions and the sweep's score, success − collisions."""

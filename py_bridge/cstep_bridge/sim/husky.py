@@ -22,11 +22,12 @@ Clearpath's figures, the node's ``wheel_max_speed`` and ``wheel_max_acceleration
 URDF's continuous joints give none). A skid steer's wheels scrub sideways in a turn: Clearpath
 calibrated the Husky's effective track at 1.875 times its geometric one, which the core's model
 turns on (``wheel_separation_multiplier``). PyBullet's wheels, gripping sideways as firmly as
-forward, scrubbed far more (spinning at top rim speed, 1.0 rad/s: a multiplier of 3.5); their
-sideways friction is scaled (:data:`WHEEL_SIDEWAYS_FRICTION`) so that the simulated Husky spins
-as the calibrated one does. The slip still grows with the turn's tightness and speed, as on a
-floor, which one multiplier cannot follow (at half the top rim speed the spin is 0.73 rad/s
-against the model's 0.93).
+forward, scrubbed far more (spinning at top rim speed, 1.22–1.40 rad/s over headings: a
+multiplier of 2.7–3.1); their sideways friction is scaled (:data:`WHEEL_SIDEWAYS_FRICTION`) so
+that the simulated Husky spins as the calibrated one does. The slip still changes with the
+turn's speed, which one multiplier cannot follow (at half the top rim speed the spin is
+0.72–0.74 rad/s against the model's 0.93). ``experiments/husky/spin_calibration.py`` measures
+both.
 
 Physics at 240 Hz, control at 10 Hz (24 physics steps): the rate a LiDAR scans, the demo's.
 The odometry is the root link's (``base_footprint``, on the ground): its pose, and its twist,
@@ -87,8 +88,9 @@ a skid steer."""
 WHEEL_SIDEWAYS_FRICTION = 0.63
 """The wheels' friction along their axles, as a fraction of along their rolling direction
 (PyBullet's anisotropic friction): with it the simulated Husky, spinning at the top rim speed,
-turns at 2·(1 m/s)/(1.875 × track), 1.87 rad/s, as the calibrated one does (1.77–1.93 rad/s
-over headings; 1.01 rad/s with full sideways friction)."""
+turns at 2·(1 m/s)/(1.875 × track), 1.87 rad/s, as the calibrated one does (1.75–2.02 rad/s
+over headings; 1.22–1.40 rad/s with full sideways friction:
+``experiments/husky/spin_calibration.py``)."""
 WHEEL_TORQUE = 100.0
 """The wheel motors' torque bound (N·m): enough that the acceleration bound, not the motors,
 limits the drive (the URDF gives no effort limit)."""

@@ -115,11 +115,7 @@ impl DiffDrive {
         separation_multiplier: Option<f64>,
     ) -> Self {
         let separation_multiplier =
-            separation_multiplier.unwrap_or(if is_skid_steer(description) {
-                SKID_STEER_SEPARATION_MULTIPLIER
-            } else {
-                1.0
-            });
+            separation_multiplier.unwrap_or_else(|| default_separation_multiplier(description));
         for (name, value) in [
             ("max_speed", max_speed),
             ("max_acceleration", max_acceleration),
@@ -172,14 +168,15 @@ impl DiffDrive {
     }
 }
 
-/// True for more than one wheel on a side: a skid steer.
-fn is_skid_steer(description: &WheeledDescription) -> bool {
-    let left = description
-        .wheels
-        .iter()
-        .filter(|w| w.centre.y > 0.0)
-        .count();
-    left > 1 || description.wheels.len() - left > 1
+/// The effective track over the geometric one that `description`'s drive turns on unless a
+/// calibration says otherwise: [`SKID_STEER_SEPARATION_MULTIPLIER`] for a skid steer, 1 for one
+/// wheel a side.
+pub fn default_separation_multiplier(description: &WheeledDescription) -> f64 {
+    if description.is_skid_steer() {
+        SKID_STEER_SEPARATION_MULTIPLIER
+    } else {
+        1.0
+    }
 }
 
 impl Dynamics for DiffDrive {

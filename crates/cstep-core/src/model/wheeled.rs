@@ -43,6 +43,13 @@ pub struct Wheel {
     pub effort_limit: Option<f64>,
 }
 
+impl Wheel {
+    /// Whether the wheel is on the robot's left (y > 0).
+    pub fn is_left(&self) -> bool {
+        self.centre.y > 0.0
+    }
+}
+
 /// The axis-aligned rectangle, in the root frame, that holds the horizontal projection of the
 /// chassis's and the wheels' collision shapes, m.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -99,8 +106,7 @@ impl WheeledDescription {
         let doc = document(xml, source)?;
         let tree = Tree::read(&doc.root_element(), source)?;
         let wheels = tree.wheels()?;
-        let (left, right): (Vec<&Wheel>, Vec<&Wheel>) =
-            wheels.iter().partition(|w| w.centre.y > 0.0);
+        let (left, right): (Vec<&Wheel>, Vec<&Wheel>) = wheels.iter().partition(|w| w.is_left());
         let mean = |ws: &[&Wheel], f: fn(&Wheel) -> f64| {
             ws.iter().map(|w| f(w)).sum::<f64>() / ws.len() as f64
         };
@@ -137,6 +143,16 @@ impl WheeledDescription {
             yaw_inertia,
             outline,
         })
+    }
+
+    /// The wheels on the left (y > 0) or, with `left` false, the right, in joint-name order.
+    pub fn side(&self, left: bool) -> impl Iterator<Item = &Wheel> {
+        self.wheels.iter().filter(move |w| w.is_left() == left)
+    }
+
+    /// More than one wheel on a side: a skid steer, whose wheels scrub sideways in a turn.
+    pub fn is_skid_steer(&self) -> bool {
+        self.side(true).count() > 1 || self.side(false).count() > 1
     }
 
     /// The top rim speed every wheel's `<limit velocity>` allows (the smallest, times the wheel

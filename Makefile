@@ -30,7 +30,7 @@ ROS_BUILD_ENV := $(VENV_ENV) \
 	AMENT_PREFIX_PATH=$(VENV_ABS) CMAKE_PREFIX_PATH=$(VENV_ABS) PATH=$(VENV_ABS)/bin:$$PATH
 
 .PHONY: test lint lint-rust lint-python test-rust test-python venv colcon bench bench-latency \
-	bench-steps bench-train bench-stale bench-services soak fuzz-cdr fuzz-yaml parameter-docs
+	bench-steps bench-scorer bench-train bench-stale bench-services soak fuzz-cdr fuzz-yaml parameter-docs
 
 test: lint test-rust test-python
 
